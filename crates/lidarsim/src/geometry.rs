@@ -1,0 +1,285 @@
+//! Rays, boxes and the rotations between the scanner and the world.
+//!
+//! World frame (DESIGN.md, "Frames, units, conventions"): right-handed,
+//! X east, Y north, Z up, metres, `f64`. Scanner frame (specification,
+//! Fig. 8): `y` forward, `z` down, `x` to the left.
+
+pub use glam::{DMat3, DVec3};
+
+/// Speed of light in vacuum, m/s.
+pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
+
+/// A half-line `origin + t · dir`, `t ≥ 0`, with a unit direction
+/// (the specification's pulse path `p + t × dir`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Start of the ray (sensor position), world metres.
+    pub origin: DVec3,
+    /// Unit direction.
+    pub dir: DVec3,
+}
+
+impl Ray {
+    /// A ray from `origin` along `dir` (normalised here).
+    pub fn new(origin: DVec3, dir: DVec3) -> Self {
+        Self {
+            origin,
+            dir: dir.normalize(),
+        }
+    }
+
+    /// The point at distance `t` along the ray (specification Eq. 1 with
+    /// `t = c·t_pulse/2`).
+    #[inline]
+    pub fn at(&self, t: f64) -> DVec3 {
+        self.origin + self.dir * t
+    }
+}
+
+/// An axis-aligned bounding box (specification, "bounding box").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    /// Lower corner.
+    pub min: DVec3,
+    /// Upper corner.
+    pub max: DVec3,
+}
+
+impl Aabb {
+    /// The empty box (the identity of [`Aabb::union`]).
+    pub const EMPTY: Aabb = Aabb {
+        min: DVec3::splat(f64::INFINITY),
+        max: DVec3::splat(f64::NEG_INFINITY),
+    };
+
+    /// The smallest box holding all `points`.
+    pub fn from_points<'a>(points: impl IntoIterator<Item = &'a DVec3>) -> Self {
+        points
+            .into_iter()
+            .fold(Self::EMPTY, |b, p| b.union_point(*p))
+    }
+
+    /// This box grown to hold `p`.
+    pub fn union_point(self, p: DVec3) -> Self {
+        Self {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
+    }
+
+    /// The smallest box holding both boxes.
+    pub fn union(self, other: Aabb) -> Self {
+        Self {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
+    }
+
+    /// True when the box holds no point.
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
+    }
+
+    /// Centre of the box.
+    pub fn center(&self) -> DVec3 {
+        (self.min + self.max) * 0.5
+    }
+
+    /// Edge lengths.
+    pub fn extent(&self) -> DVec3 {
+        self.max - self.min
+    }
+
+    /// Surface area (used by the surface-area heuristic of the BVH).
+    pub fn surface_area(&self) -> f64 {
+        if self.is_empty() {
+            return 0.0;
+        }
+        let e = self.extent();
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+
+    /// True when `p` lies inside the box grown by `tol` on every side.
+    pub fn contains(&self, p: DVec3, tol: f64) -> bool {
+        p.cmpge(self.min - DVec3::splat(tol)).all() && p.cmple(self.max + DVec3::splat(tol)).all()
+    }
+}
+
+/// Right-handed rotation by `a` radians about the world/body x axis.
+pub fn rot_x(a: f64) -> DMat3 {
+    DMat3::from_rotation_x(a)
+}
+
+/// Right-handed rotation by `a` radians about the y axis.
+pub fn rot_y(a: f64) -> DMat3 {
+    DMat3::from_rotation_y(a)
+}
+
+/// Right-handed rotation by `a` radians about the z axis.
+pub fn rot_z(a: f64) -> DMat3 {
+    DMat3::from_rotation_z(a)
+}
+
+/// Maps scanner axes (x left, y forward, z down; specification Fig. 8) to
+/// world axes for an aircraft flying north, level: x → west, y → north,
+/// z → down. It is a half turn about the forward axis.
+pub const SCANNER_TO_LEVEL_NORTH: DMat3 = DMat3::from_cols(
+    DVec3::new(-1.0, 0.0, 0.0),
+    DVec3::new(0.0, 1.0, 0.0),
+    DVec3::new(0.0, 0.0, -1.0),
+);
+
+/// Attitude of the aircraft, radians.
+///
+/// All three are right-handed rotations: `yaw` about the world vertical
+/// (0 = flying north, positive turns the nose towards the west), `pitch`
+/// about the across-track axis pointing to the right wing (positive = nose
+/// up), `roll` about the along-track axis pointing forward (positive = right
+/// wing down). They are the specification's omega/phi/kappa ("roll, pitch,
+/// heading", Fig. 17), named after the motion they describe: with the
+/// aircraft flying along the world y axis as in the specification, roll
+/// turns about y and pitch about x.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Attitude {
+    /// Rotation about the forward axis, rad.
+    pub roll_rad: f64,
+    /// Rotation about the right-wing axis, rad.
+    pub pitch_rad: f64,
+    /// Heading: rotation about the vertical, rad, 0 = north, counter-clockwise.
+    pub yaw_rad: f64,
+}
+
+impl Attitude {
+    /// Rotation from the aircraft's level-north frame to the world:
+    /// `Rz(yaw) · Rx(pitch) · Ry(roll)` (yaw, then pitch, then roll, as
+    /// intrinsic rotations: the aviation order).
+    pub fn body_to_world(&self) -> DMat3 {
+        rot_z(self.yaw_rad) * rot_x(self.pitch_rad) * rot_y(self.roll_rad)
+    }
+
+    /// Rotation from the scanner frame (specification Fig. 8) to the world.
+    /// A unit vector in the scanner frame times this matrix is the world
+    /// direction `dir` of the specification ("Rotate it to World
+    /// xyz-system: R × [x, 0, z]_LiDAR").
+    pub fn scanner_to_world(&self) -> DMat3 {
+        self.body_to_world() * SCANNER_TO_LEVEL_NORTH
+    }
+}
+
+/// Unit vector of the horizontal direction to the right of a heading
+/// `yaw_rad` (the positive across-track direction used for LAS scan angles).
+pub fn right_of(yaw_rad: f64) -> DVec3 {
+    DVec3::new(yaw_rad.cos(), yaw_rad.sin(), 0.0)
+}
+
+/// Unit vector of the horizontal direction of flight for a heading.
+pub fn forward_of(yaw_rad: f64) -> DVec3 {
+    DVec3::new(-yaw_rad.sin(), yaw_rad.cos(), 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn close(a: DVec3, b: DVec3) -> bool {
+        (a - b).length() < 1e-12
+    }
+
+    #[test]
+    fn level_north_scanner_axes() {
+        let r = Attitude::default().scanner_to_world();
+        // Beam straight down the scanner z axis points to the ground.
+        assert!(close(r * DVec3::Z, -DVec3::Z));
+        // Scanner x is to the left of a north-flying aircraft: west.
+        assert!(close(r * DVec3::X, -DVec3::X));
+        assert!(close(r * DVec3::Y, DVec3::Y));
+    }
+
+    #[test]
+    fn yaw_turns_heading_counter_clockwise() {
+        let east = Attitude {
+            yaw_rad: -std::f64::consts::FRAC_PI_2,
+            ..Default::default()
+        };
+        let r = east.scanner_to_world();
+        assert!(close(r * DVec3::Y, DVec3::X));
+        assert!(close(forward_of(east.yaw_rad), DVec3::X));
+        // Flying east, the left side is north.
+        assert!(close(r * DVec3::X, DVec3::Y));
+        assert!(close(right_of(east.yaw_rad), -DVec3::Y));
+    }
+
+    #[test]
+    fn roll_right_wing_down_moves_nadir_beam_left() {
+        // Right wing down tilts the scanner's down axis towards the left
+        // (west when flying north): the nadir footprint moves left.
+        let a = Attitude {
+            roll_rad: 0.1,
+            ..Default::default()
+        };
+        let d = a.scanner_to_world() * DVec3::Z;
+        assert!((d.x - (-(0.1f64).sin())).abs() < 1e-12);
+        assert!(d.y.abs() < 1e-12);
+    }
+
+    #[test]
+    fn pitch_nose_up_moves_nadir_beam_forward() {
+        // Nose up turns the belly, and the down axis with it, forwards.
+        let a = Attitude {
+            pitch_rad: 0.1,
+            ..Default::default()
+        };
+        let d = a.scanner_to_world() * DVec3::Z;
+        assert!((d.y - (0.1f64).sin()).abs() < 1e-12);
+        assert!(d.x.abs() < 1e-12);
+    }
+
+    #[test]
+    fn matches_independent_matrices() {
+        // Compare with matrices written out element by element.
+        let (r, p, y) = (0.03f64, -0.02f64, 0.7f64);
+        let rx = DMat3::from_cols_array(&[
+            1.0,
+            0.0,
+            0.0,
+            0.0,
+            p.cos(),
+            p.sin(),
+            0.0,
+            -p.sin(),
+            p.cos(),
+        ]);
+        let ry = DMat3::from_cols_array(&[
+            r.cos(),
+            0.0,
+            -r.sin(),
+            0.0,
+            1.0,
+            0.0,
+            r.sin(),
+            0.0,
+            r.cos(),
+        ]);
+        let rz = DMat3::from_cols_array(&[
+            y.cos(),
+            y.sin(),
+            0.0,
+            -y.sin(),
+            y.cos(),
+            0.0,
+            0.0,
+            0.0,
+            1.0,
+        ]);
+        let want = rz * rx * ry;
+        let got = Attitude {
+            roll_rad: r,
+            pitch_rad: p,
+            yaw_rad: y,
+        }
+        .body_to_world();
+        for (a, b) in want.to_cols_array().iter().zip(got.to_cols_array()) {
+            assert!((a - b).abs() < 1e-12);
+        }
+    }
+}

@@ -1,0 +1,65 @@
+//! # lidarsim — an airborne LiDAR simulator
+//!
+//! lidarsim flies a virtual aircraft with an oscillating-mirror laser
+//! scanner over a scene of planar polygons and triangle meshes, casts every
+//! pulse as a bundle of sub-rays, records the returned energy as a full
+//! waveform, detects echoes in it and writes georeferenced point clouds
+//! (LAS 1.4) with ground-truth classes.
+//!
+//! The models follow the project specification
+//! (`shared/seed/000_c806ae4c9704ad33.txt`, cited as "specification"); each
+//! module names the equations it implements.
+//!
+//! Data flow, one module per step:
+//! [`survey`] (file → validated [`Survey`] and [`scene::Scene`]) →
+//! [`accel`] (closest hits) ← [`platform`] (pose at `t`) + [`scanner`]
+//! (mirror angle, sub-rays) → [`radiometry`] (Eq. 2) → [`waveform`]
+//! (sampled signal) → [`detection`] (echoes) → [`sim`] (georeferencing,
+//! classes, parallel blocks) → [`output`] (LAS, XYZ). [`run`] ties a whole
+//! run to an output directory; [`plan`] predicts swath and density.
+//!
+//! ```
+//! use lidarsim::{Survey, accel::Bvh, output::MemorySink, sim::Simulator};
+//!
+//! let text = r#"
+//! [scanner]
+//! prf_hz = 20000
+//! [[flight_line]]
+//! start_m = [0.0, -20.0, 300.0]
+//! end_m = [0.0, 20.0, 300.0]
+//! speed_mps = 50.0
+//! [materials.grass]
+//! reflectance = 0.4
+//! [[polygon]]
+//! material = "grass"
+//! class = "ground"
+//! vertices_m = [[-200, -200, 0], [200, -200, 0], [200, 200, 0], [-200, 200, 0]]
+//! "#;
+//! let survey = Survey::from_toml(text, None).unwrap();
+//! let bvh = Bvh::build(survey.scene.clone());
+//! let sim = Simulator::new(&survey, &bvh);
+//! let mut sinks: Vec<Box<dyn lidarsim::output::PointSink>> = vec![Box::new(MemorySink::default())];
+//! let counts = sim.run(1, &mut sinks, &|_| {}).unwrap();
+//! assert_eq!(counts.pulses, 16_000);
+//! assert_eq!(counts.points, counts.pulses); // one echo per pulse from a plane
+//! ```
+
+#![deny(missing_docs)]
+
+pub mod accel;
+pub mod demo;
+pub mod detection;
+pub mod geometry;
+pub mod output;
+pub mod plan;
+pub mod platform;
+pub mod radiometry;
+pub mod rng;
+pub mod run;
+pub mod scanner;
+pub mod scene;
+pub mod sim;
+pub mod survey;
+pub mod waveform;
+
+pub use survey::Survey;

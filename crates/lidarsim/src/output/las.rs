@@ -1,0 +1,189 @@
+//! LAS 1.4 writer, point data record format 6.
+//!
+//! Byte layout from the ASPRS LAS Specification 1.4 R15 (9 July 2019):
+//! public header block (Table 3, 375 bytes), point data record format 6
+//! (Table 8, 30 bytes). All values little-endian.
+
+use std::io::{self, Seek, SeekFrom, Write};
+use std::path::Path;
+
+use super::{AtomicFile, PointRecord, PointSink};
+
+/// Size of a point data record of format 6, bytes.
+pub const POINT_FORMAT_6_LEN: u16 = 30;
+const HEADER_SIZE: u16 = 375;
+
+/// Fixed parts of the header chosen before the first point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LasSettings {
+    /// Coordinate resolution, m (same on all axes).
+    pub scale_m: f64,
+    /// Offset subtracted before scaling, m.
+    pub offset_m: [f64; 3],
+    /// True when GPS time is Adjusted Standard GPS Time (global encoding
+    /// bit 0); false when it is seconds of a GPS week, which is what
+    /// readers assume for our seconds-since-flight-start.
+    pub adjusted_standard_gps_time: bool,
+    /// File source ID (0 when the file holds several flight lines).
+    pub file_source_id: u16,
+    /// File creation day of year and year.
+    pub creation_day_year: (u16, u16),
+    /// Generating software, up to 32 bytes.
+    pub generating_software: String,
+}
+
+/// Streams points into a LAS 1.4 file; the header (counts, bounds) is
+/// written again when the file is finished.
+#[derive(Debug)]
+pub struct LasWriter {
+    file: AtomicFile,
+    settings: LasSettings,
+    count: u64,
+    by_return: [u64; 15],
+    min: [i32; 3],
+    max: [i32; 3],
+    buf: Vec<u8>,
+}
+
+impl LasWriter {
+    /// Creates `path` (as `path.partial` until finished).
+    pub fn create(path: &Path, settings: LasSettings) -> io::Result<Self> {
+        let mut w = Self {
+            file: AtomicFile::create(path)?,
+            settings,
+            count: 0,
+            by_return: [0; 15],
+            min: [i32::MAX; 3],
+            max: [i32::MIN; 3],
+            buf: Vec::with_capacity(1 << 16),
+        };
+        let header = w.header();
+        w.file.writer().write_all(&header)?;
+        Ok(w)
+    }
+
+    fn quantize(&self, v: f64, axis: usize) -> io::Result<i32> {
+        let q = ((v - self.settings.offset_m[axis]) / self.settings.scale_m).round();
+        if q.is_finite() && q >= i32::MIN as f64 && q <= i32::MAX as f64 {
+            Ok(q as i32)
+        } else {
+            Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "coordinate {v} m cannot be stored with offset {} m and scale {} m",
+                    self.settings.offset_m[axis], self.settings.scale_m
+                ),
+            ))
+        }
+    }
+
+    /// The 375-byte public header block (LAS 1.4 R15, Table 3).
+    fn header(&self) -> Vec<u8> {
+        let s = &self.settings;
+        let mut h = Vec::with_capacity(HEADER_SIZE as usize);
+        h.extend_from_slice(b"LASF");
+        h.extend_from_slice(&s.file_source_id.to_le_bytes());
+        // Global encoding: bit 0 GPS time type; bit 4 WKT, which the
+        // specification requires for point formats 6–10.
+        let encoding: u16 = u16::from(s.adjusted_standard_gps_time) | (1 << 4);
+        h.extend_from_slice(&encoding.to_le_bytes());
+        h.extend_from_slice(&[0u8; 16]); // project ID (GUID)
+        h.extend_from_slice(&[1, 4]); // version 1.4
+        h.extend_from_slice(&fixed_str::<32>("lidarsim simulation"));
+        h.extend_from_slice(&fixed_str::<32>(&s.generating_software));
+        h.extend_from_slice(&s.creation_day_year.0.to_le_bytes());
+        h.extend_from_slice(&s.creation_day_year.1.to_le_bytes());
+        h.extend_from_slice(&HEADER_SIZE.to_le_bytes());
+        h.extend_from_slice(&u32::from(HEADER_SIZE).to_le_bytes()); // offset to point data
+        h.extend_from_slice(&0u32.to_le_bytes()); // number of VLRs
+        h.push(6); // point data record format
+        h.extend_from_slice(&POINT_FORMAT_6_LEN.to_le_bytes());
+        // Legacy point counts: zero for point formats 6–10.
+        h.extend_from_slice(&0u32.to_le_bytes());
+        h.extend_from_slice(&[0u8; 20]);
+        for _ in 0..3 {
+            h.extend_from_slice(&s.scale_m.to_le_bytes());
+        }
+        for o in s.offset_m {
+            h.extend_from_slice(&o.to_le_bytes());
+        }
+        let (min, max) = if self.count == 0 {
+            ([0.0; 3], [0.0; 3])
+        } else {
+            (
+                [0, 1, 2].map(|a| self.min[a] as f64 * s.scale_m + s.offset_m[a]),
+                [0, 1, 2].map(|a| self.max[a] as f64 * s.scale_m + s.offset_m[a]),
+            )
+        };
+        for a in 0..3 {
+            h.extend_from_slice(&max[a].to_le_bytes());
+            h.extend_from_slice(&min[a].to_le_bytes());
+        }
+        h.extend_from_slice(&0u64.to_le_bytes()); // start of waveform data packet record
+        h.extend_from_slice(&0u64.to_le_bytes()); // start of first EVLR
+        h.extend_from_slice(&0u32.to_le_bytes()); // number of EVLRs
+        h.extend_from_slice(&self.count.to_le_bytes());
+        for n in self.by_return {
+            h.extend_from_slice(&n.to_le_bytes());
+        }
+        debug_assert_eq!(h.len(), HEADER_SIZE as usize);
+        h
+    }
+}
+
+fn fixed_str<const N: usize>(s: &str) -> [u8; N] {
+    let mut out = [0u8; N];
+    let b = s.as_bytes();
+    let n = b.len().min(N);
+    out[..n].copy_from_slice(&b[..n]);
+    out
+}
+
+impl PointSink for LasWriter {
+    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+        self.buf.clear();
+        for p in points {
+            let xyz = [
+                self.quantize(p.position_m.x, 0)?,
+                self.quantize(p.position_m.y, 1)?,
+                self.quantize(p.position_m.z, 2)?,
+            ];
+            for a in 0..3 {
+                self.min[a] = self.min[a].min(xyz[a]);
+                self.max[a] = self.max[a].max(xyz[a]);
+                self.buf.extend_from_slice(&xyz[a].to_le_bytes());
+            }
+            self.buf.extend_from_slice(&p.intensity.to_le_bytes());
+            let rn = p.return_number.clamp(1, 15);
+            let nr = p.number_of_returns.clamp(1, 15);
+            self.buf.push(rn | (nr << 4));
+            // Classification flags 0, scanner channel 0, then the scan
+            // direction flag (bit 6) and edge of flight line (bit 7).
+            self.buf.push(
+                (u8::from(p.scan_direction_positive) << 6)
+                    | (u8::from(p.edge_of_flight_line) << 7),
+            );
+            self.buf.push(p.classification);
+            self.buf.push(0); // user data
+            // Scan angle in 0.006° increments, −30 000 … +30 000.
+            let sa = (p.scan_angle_deg / 0.006).round().clamp(-30_000.0, 30_000.0) as i16;
+            self.buf.extend_from_slice(&sa.to_le_bytes());
+            self.buf.extend_from_slice(&p.point_source_id.to_le_bytes());
+            self.buf.extend_from_slice(&p.gps_time_s.to_le_bytes());
+            self.count += 1;
+            self.by_return[usize::from(rn) - 1] += 1;
+        }
+        self.file.writer().write_all(&self.buf)
+    }
+
+    fn finish(mut self: Box<Self>) -> io::Result<()> {
+        let header = self.header();
+        let w = self.file.writer();
+        w.flush()?;
+        w.seek(SeekFrom::Start(0))?;
+        w.write_all(&header)?;
+        self.file.commit()
+    }
+
+    fn discard(self: Box<Self>) {}
+}

@@ -1,0 +1,203 @@
+//! Where the points go.
+//!
+//! The simulator hands every detected echo, in pulse order, to one or more
+//! [`PointSink`]s: the LAS 1.4 writer ([`LasWriter`]), the text writer
+//! ([`XyzWriter`]) and an in-memory sink ([`MemorySink`]) for tests and
+//! library users. File sinks write under a temporary name
+//! (`NAME.partial`) and rename to the final name only when complete, so an
+//! interrupted or failed run never leaves a file that looks finished.
+
+mod las;
+mod xyz;
+
+pub use las::{LasSettings, LasWriter, POINT_FORMAT_6_LEN};
+pub use xyz::XyzWriter;
+
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use crate::geometry::DVec3;
+
+/// One point of the output cloud: an echo with its attributes.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PointRecord {
+    /// Georeferenced position, world metres (specification Eq. 1).
+    pub position_m: DVec3,
+    /// Time of emission of the pulse, s, in the output time base.
+    pub gps_time_s: f64,
+    /// LAS intensity (energy amplitude × gain, clipped).
+    pub intensity: u16,
+    /// Energy amplitude of the echo, amplitude units.
+    pub amplitude: f64,
+    /// Echo width (FWHM), ns.
+    pub echo_width_ns: f64,
+    /// Range from the sensor, m.
+    pub range_m: f64,
+    /// 1-based number of this echo within its pulse.
+    pub return_number: u8,
+    /// Number of echoes of the pulse.
+    pub number_of_returns: u8,
+    /// LAS scan direction flag: true when the beam moves left to right.
+    pub scan_direction_positive: bool,
+    /// LAS edge-of-flight-line flag: last pulse before the mirror turns.
+    pub edge_of_flight_line: bool,
+    /// Scan angle, degrees, LAS convention (0 = vertical, positive to the
+    /// right of the flight direction), attitude included.
+    pub scan_angle_deg: f64,
+    /// ASPRS classification code.
+    pub classification: u8,
+    /// Flight line number (LAS point source ID).
+    pub point_source_id: u16,
+    /// Pulse index within the flight line.
+    pub pulse_index: u64,
+    /// Scene object that returned most of the echo's energy.
+    pub object_id: u32,
+}
+
+/// Receives the points of a survey in pulse order.
+pub trait PointSink: Send {
+    /// Appends points.
+    fn write(&mut self, points: &[PointRecord]) -> io::Result<()>;
+    /// Completes the output (headers, renaming).
+    fn finish(self: Box<Self>) -> io::Result<()>;
+    /// Abandons the output, removing anything partial.
+    fn discard(self: Box<Self>);
+}
+
+/// Keeps all points in memory.
+#[derive(Debug, Default)]
+pub struct MemorySink {
+    /// Points received so far.
+    pub points: Vec<PointRecord>,
+}
+
+impl PointSink for MemorySink {
+    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+        self.points.extend_from_slice(points);
+        Ok(())
+    }
+    fn finish(self: Box<Self>) -> io::Result<()> {
+        Ok(())
+    }
+    fn discard(self: Box<Self>) {}
+}
+
+/// A file written under `NAME.partial` and renamed to `NAME` on
+/// [`AtomicFile::commit`]; dropped uncommitted, the partial file is removed.
+#[derive(Debug)]
+pub struct AtomicFile {
+    writer: Option<BufWriter<File>>,
+    partial: PathBuf,
+    target: PathBuf,
+}
+
+impl AtomicFile {
+    /// Creates `target.partial` for writing (any stale final file with the
+    /// same name is removed first so it cannot be mistaken for this run's).
+    pub fn create(target: &Path) -> io::Result<Self> {
+        let mut partial = target.as_os_str().to_owned();
+        partial.push(".partial");
+        let partial = PathBuf::from(partial);
+        match std::fs::remove_file(target) {
+            Ok(()) => {}
+            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
+            Err(e) => return Err(e),
+        }
+        let file = File::create(&partial).map_err(|e| {
+            io::Error::new(e.kind(), format!("cannot create '{}': {e}", partial.display()))
+        })?;
+        Ok(Self {
+            writer: Some(BufWriter::with_capacity(1 << 20, file)),
+            partial,
+            target: target.to_path_buf(),
+        })
+    }
+
+    /// The buffered writer.
+    pub fn writer(&mut self) -> &mut BufWriter<File> {
+        self.writer.as_mut().expect("writer present until commit")
+    }
+
+    /// Flushes, syncs and renames to the final name.
+    pub fn commit(mut self) -> io::Result<()> {
+        let w = self.writer.take().expect("writer present until commit");
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        drop(file);
+        std::fs::rename(&self.partial, &self.target)
+    }
+}
+
+impl Drop for AtomicFile {
+    fn drop(&mut self) {
+        if self.writer.take().is_some() {
+            let _ = std::fs::remove_file(&self.partial);
+        }
+    }
+}
+
+/// Writes a whole small file atomically.
+pub fn write_atomic(target: &Path, bytes: &[u8]) -> io::Result<()> {
+    let mut f = AtomicFile::create(target)?;
+    f.writer().write_all(bytes)?;
+    f.commit()
+}
+
+/// Day of year (1-based) and year of a Unix time, UTC (for the LAS header).
+pub fn day_of_year(unix_s: i64) -> (u16, u16) {
+    let days = unix_s.div_euclid(86_400);
+    // Civil-from-days (H. Hinnant, "chrono-compatible low-level date
+    // algorithms").
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy_mar = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy_mar + 2) / 153;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    let jan1 = days_from_civil(year, 1, 1);
+    ((days - jan1 + 1) as u16, year as u16)
+}
+
+fn days_from_civil(y: i64, m: i64, d: i64) -> i64 {
+    let y = if m <= 2 { y - 1 } else { y };
+    let era = y.div_euclid(400);
+    let yoe = y - era * 400;
+    let mp = if m > 2 { m - 3 } else { m + 9 };
+    let doy = (153 * mp + 2) / 5 + d - 1;
+    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    era * 146_097 + doe - 719_468
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn day_of_year_known_dates() {
+        assert_eq!(day_of_year(0), (1, 1970));
+        // 2024-03-01 is day 61 of a leap year.
+        assert_eq!(day_of_year(1_709_251_200), (61, 2024));
+        // 2026-12-31.
+        assert_eq!(day_of_year(1_798_675_200), (365, 2026));
+    }
+
+    #[test]
+    fn atomic_file_is_invisible_until_commit() {
+        let dir = std::env::temp_dir().join(format!("lidarsim-atomic-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let target = dir.join("a.txt");
+        {
+            let mut f = AtomicFile::create(&target).unwrap();
+            f.writer().write_all(b"half").unwrap();
+            assert!(!target.exists());
+        } // dropped: partial removed
+        assert!(!target.exists());
+        assert!(!dir.join("a.txt.partial").exists());
+        write_atomic(&target, b"whole").unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"whole");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

@@ -1,0 +1,67 @@
+//! Plain-text point output: one point per line, space separated, with a
+//! header line naming the columns.
+
+use std::io::{self, Write};
+use std::path::Path;
+
+use super::{AtomicFile, PointRecord, PointSink};
+
+/// The column names of the header line, in order.
+pub const XYZ_COLUMNS: &str = "x y z intensity return_number number_of_returns classification \
+                               gps_time scan_angle_deg point_source_id amplitude echo_width_ns \
+                               range_m";
+
+/// Writes `points.xyz`.
+#[derive(Debug)]
+pub struct XyzWriter {
+    file: AtomicFile,
+    line: String,
+}
+
+impl XyzWriter {
+    /// Creates `path` (as `path.partial` until finished) and writes the
+    /// header line.
+    pub fn create(path: &Path) -> io::Result<Self> {
+        let mut file = AtomicFile::create(path)?;
+        writeln!(file.writer(), "{XYZ_COLUMNS}")?;
+        Ok(Self {
+            file,
+            line: String::with_capacity(256),
+        })
+    }
+}
+
+impl PointSink for XyzWriter {
+    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+        use std::fmt::Write as _;
+        for p in points {
+            self.line.clear();
+            // Formatting into a String cannot fail.
+            let _ = writeln!(
+                self.line,
+                "{:.3} {:.3} {:.3} {} {} {} {} {:.9} {:.3} {} {:.6} {:.3} {:.4}",
+                p.position_m.x,
+                p.position_m.y,
+                p.position_m.z,
+                p.intensity,
+                p.return_number,
+                p.number_of_returns,
+                p.classification,
+                p.gps_time_s,
+                p.scan_angle_deg,
+                p.point_source_id,
+                p.amplitude,
+                p.echo_width_ns,
+                p.range_m
+            );
+            self.file.writer().write_all(self.line.as_bytes())?;
+        }
+        Ok(())
+    }
+
+    fn finish(self: Box<Self>) -> io::Result<()> {
+        self.file.commit()
+    }
+
+    fn discard(self: Box<Self>) {}
+}

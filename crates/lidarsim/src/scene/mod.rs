@@ -1,0 +1,316 @@
+//! The scene: surfaces with materials and ground-truth classes.
+//!
+//! A [`Scene`] is a flat list of [`Primitive`]s (planar polygons and
+//! triangles), the [`Material`]s they refer to and the [`SceneObject`]s they
+//! belong to (one per survey polygon or mesh). It knows nothing about rays
+//! beyond the exact per-primitive intersection; finding the closest hit among
+//! many primitives is the job of [`crate::accel`].
+
+mod obj;
+mod polygon;
+
+pub use obj::{MeshError, MeshPlacement, load_obj};
+pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
+
+use crate::geometry::{Aabb, DVec3, Ray};
+
+/// Ground-truth class of a surface. It becomes the LAS classification of
+/// the points that surface returns (ASPRS standard classes, LAS 1.4 R15
+/// Table 17).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SurfaceClass {
+    /// Bare earth, lawns, fields: ASPRS 2.
+    Ground,
+    /// Streets and paved areas: ASPRS 11 (road surface).
+    Road,
+    /// Roof planes: ASPRS 6 (building).
+    Roof,
+    /// Building walls: ASPRS 6 (building).
+    Wall,
+    /// Vegetation: ASPRS 3, 4 or 5 by height above ground.
+    Vegetation,
+    /// Water surfaces: ASPRS 9.
+    Water,
+    /// Bridge decks: ASPRS 17.
+    Bridge,
+    /// Anything else: ASPRS 1 (unclassified).
+    Unclassified,
+}
+
+impl SurfaceClass {
+    /// All classes with their names in survey files.
+    pub const ALL: [(&'static str, SurfaceClass); 8] = [
+        ("ground", SurfaceClass::Ground),
+        ("road", SurfaceClass::Road),
+        ("roof", SurfaceClass::Roof),
+        ("wall", SurfaceClass::Wall),
+        ("vegetation", SurfaceClass::Vegetation),
+        ("water", SurfaceClass::Water),
+        ("bridge", SurfaceClass::Bridge),
+        ("unclassified", SurfaceClass::Unclassified),
+    ];
+
+    /// Parses a class name as written in survey files and OBJ/MTL hints.
+    pub fn from_name(name: &str) -> Option<Self> {
+        let lower = name.trim().to_ascii_lowercase();
+        Self::ALL
+            .iter()
+            .find(|(n, _)| *n == lower)
+            .map(|(_, c)| *c)
+            .or(match lower.as_str() {
+                "building" => Some(SurfaceClass::Roof),
+                "unknown" => Some(SurfaceClass::Unclassified),
+                _ => None,
+            })
+    }
+
+    /// The name used in survey files.
+    pub fn name(self) -> &'static str {
+        Self::ALL
+            .iter()
+            .find(|(_, c)| *c == self)
+            .map(|(n, _)| *n)
+            .unwrap_or("unclassified")
+    }
+
+    /// ASPRS classification code for a point of this class that lies
+    /// `height_above_ground_m` above the ground beneath it (only used for
+    /// vegetation: low < 0.5 m ≤ medium < 2 m ≤ high, the usual split of
+    /// ASPRS classes 3/4/5, which the LAS specification leaves to the user).
+    pub fn asprs_code(self, height_above_ground_m: f64) -> u8 {
+        match self {
+            SurfaceClass::Ground => 2,
+            SurfaceClass::Road => 11,
+            SurfaceClass::Roof | SurfaceClass::Wall => 6,
+            SurfaceClass::Water => 9,
+            SurfaceClass::Bridge => 17,
+            SurfaceClass::Unclassified => 1,
+            SurfaceClass::Vegetation => {
+                if height_above_ground_m < LOW_VEGETATION_MAX_M {
+                    3
+                } else if height_above_ground_m < MEDIUM_VEGETATION_MAX_M {
+                    4
+                } else {
+                    5
+                }
+            }
+        }
+    }
+}
+
+/// Upper height of low vegetation (ASPRS 3), m.
+pub const LOW_VEGETATION_MAX_M: f64 = 0.5;
+/// Upper height of medium vegetation (ASPRS 4), m; above is high (5).
+pub const MEDIUM_VEGETATION_MAX_M: f64 = 2.0;
+
+/// Optical properties of a surface at the laser wavelength.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Name in the survey file or MTL file.
+    pub name: String,
+    /// Reflectance `refl`, 0–1 (specification, "Target reflectance").
+    pub reflectance: f64,
+    /// Exponent `a` of the incidence model `cos(α)^a` (1 = Lambertian).
+    pub incidence_exponent: f64,
+}
+
+/// Index of a material in [`Scene::materials`].
+pub type MaterialId = u32;
+/// Index of an object in [`Scene::objects`].
+pub type ObjectId = u32;
+
+/// A survey entry that produced primitives: one polygon, or one mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneObject {
+    /// Human-readable name (`polygon[3]`, `mesh[0]:house.obj`).
+    pub name: String,
+}
+
+/// A triangle with precomputed edges (Möller & Trumbore 1997).
+#[derive(Clone, Copy, Debug)]
+pub struct Triangle {
+    v0: DVec3,
+    e1: DVec3,
+    e2: DVec3,
+    normal: DVec3,
+}
+
+impl Triangle {
+    /// The triangle through three points, or `None` when they are collinear
+    /// or not finite.
+    pub fn new(a: DVec3, b: DVec3, c: DVec3) -> Option<Self> {
+        if !(a.is_finite() && b.is_finite() && c.is_finite()) {
+            return None;
+        }
+        let e1 = b - a;
+        let e2 = c - a;
+        let n = e1.cross(e2);
+        let scale = e1.length_squared().max(e2.length_squared());
+        if n.length_squared() <= 1e-24 * scale * scale || scale == 0.0 {
+            return None;
+        }
+        Some(Self {
+            v0: a,
+            e1,
+            e2,
+            normal: n.normalize(),
+        })
+    }
+
+    /// The three corners.
+    pub fn vertices(&self) -> [DVec3; 3] {
+        [self.v0, self.v0 + self.e1, self.v0 + self.e2]
+    }
+
+    /// Unit normal (right-hand rule over the corner order).
+    pub fn normal(&self) -> DVec3 {
+        self.normal
+    }
+
+    /// Möller–Trumbore ray/triangle intersection within `(t_min, t_max)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        let p = ray.dir.cross(self.e2);
+        let det = self.e1.dot(p);
+        if det.abs() < 1e-15 {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let s = ray.origin - self.v0;
+        let u = s.dot(p) * inv;
+        if !(0.0..=1.0).contains(&u) {
+            return None;
+        }
+        let q = s.cross(self.e1);
+        let v = ray.dir.dot(q) * inv;
+        if v < 0.0 || u + v > 1.0 {
+            return None;
+        }
+        let t = self.e2.dot(q) * inv;
+        (t > t_min && t < t_max).then_some(t)
+    }
+}
+
+/// The geometric shape of a primitive: a closed set, so an enum.
+#[derive(Clone, Debug)]
+pub enum Shape {
+    /// A planar polygon of any vertex count.
+    Polygon(Box<Polygon>),
+    /// A mesh triangle.
+    Triangle(Triangle),
+}
+
+/// One surface of the scene.
+#[derive(Clone, Debug)]
+pub struct Primitive {
+    /// Geometry.
+    pub shape: Shape,
+    /// Material index.
+    pub material: MaterialId,
+    /// Ground-truth class.
+    pub class: SurfaceClass,
+    /// The survey entry it came from.
+    pub object: ObjectId,
+}
+
+impl Primitive {
+    /// Bounding box.
+    pub fn bounds(&self) -> Aabb {
+        match &self.shape {
+            Shape::Polygon(p) => p.bounds(),
+            Shape::Triangle(t) => Aabb::from_points(&t.vertices()),
+        }
+    }
+
+    /// Distance to the surface along `ray`, if hit within `(t_min, t_max)`.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
+        match &self.shape {
+            Shape::Polygon(p) => p.intersect(ray, t_min, t_max),
+            Shape::Triangle(t) => t.intersect(ray, t_min, t_max),
+        }
+    }
+
+    /// Unit geometric normal (either side).
+    #[inline]
+    pub fn normal(&self) -> DVec3 {
+        match &self.shape {
+            Shape::Polygon(p) => p.normal(),
+            Shape::Triangle(t) => t.normal(),
+        }
+    }
+}
+
+/// All surfaces of a survey, with their materials and source objects.
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// Surfaces.
+    pub primitives: Vec<Primitive>,
+    /// Materials referenced by [`Primitive::material`].
+    pub materials: Vec<Material>,
+    /// Objects referenced by [`Primitive::object`].
+    pub objects: Vec<SceneObject>,
+}
+
+impl Scene {
+    /// Bounding box of all primitives ([`Aabb::EMPTY`] for an empty scene).
+    pub fn bounds(&self) -> Aabb {
+        self.primitives
+            .iter()
+            .fold(Aabb::EMPTY, |b, p| b.union(p.bounds()))
+    }
+
+    /// Adds a material and returns its id; a material with the same name is
+    /// reused.
+    pub fn add_material(&mut self, material: Material) -> MaterialId {
+        if let Some(i) = self.materials.iter().position(|m| m.name == material.name) {
+            return i as MaterialId;
+        }
+        self.materials.push(material);
+        (self.materials.len() - 1) as MaterialId
+    }
+
+    /// Adds an object record and returns its id.
+    pub fn add_object(&mut self, name: impl Into<String>) -> ObjectId {
+        self.objects.push(SceneObject { name: name.into() });
+        (self.objects.len() - 1) as ObjectId
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn asprs_codes() {
+        assert_eq!(SurfaceClass::Ground.asprs_code(0.0), 2);
+        assert_eq!(SurfaceClass::Road.asprs_code(0.0), 11);
+        assert_eq!(SurfaceClass::Roof.asprs_code(8.0), 6);
+        assert_eq!(SurfaceClass::Wall.asprs_code(3.0), 6);
+        assert_eq!(SurfaceClass::Water.asprs_code(0.0), 9);
+        assert_eq!(SurfaceClass::Unclassified.asprs_code(0.0), 1);
+        assert_eq!(SurfaceClass::Vegetation.asprs_code(0.2), 3);
+        assert_eq!(SurfaceClass::Vegetation.asprs_code(1.0), 4);
+        assert_eq!(SurfaceClass::Vegetation.asprs_code(12.0), 5);
+        for (name, class) in SurfaceClass::ALL {
+            assert_eq!(SurfaceClass::from_name(name), Some(class));
+            assert_eq!(class.name(), name);
+        }
+    }
+
+    #[test]
+    fn triangle_hits_inside_misses_outside() {
+        let t = Triangle::new(
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(2.0, 0.0, 0.0),
+            DVec3::new(0.0, 2.0, 0.0),
+        )
+        .unwrap();
+        let down = |x, y| Ray::new(DVec3::new(x, y, 10.0), -DVec3::Z);
+        assert!((t.intersect(&down(0.5, 0.5), 0.0, 1e9).unwrap() - 10.0).abs() < 1e-12);
+        assert!(t.intersect(&down(1.5, 1.5), 0.0, 1e9).is_none());
+        assert!(t.intersect(&down(0.5, 0.5), 0.0, 5.0).is_none());
+        assert!(Triangle::new(DVec3::ZERO, DVec3::X, DVec3::X * 2.0).is_none());
+    }
+}

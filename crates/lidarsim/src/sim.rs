@@ -1,0 +1,408 @@
+//! The simulation driver: pulses in, points out.
+//!
+//! For pulse `k` of a flight line (DESIGN.md, "Data flow"):
+//! pose at `t_k` ∘ mirror angle at `t_k` → central ray and sub-rays →
+//! closest hits → Eq. 2 per sub-ray (with speckle) → waveform → echoes →
+//! georeferenced points (Eq. 1 on the central ray) with ground-truth
+//! classes. Pulses are independent; blocks of pulses run in parallel on a
+//! rayon pool and are handed to the sinks in pulse order by a writer
+//! thread, so the output is the same for any number of threads and memory
+//! does not grow with the length of the flight.
+
+use std::io;
+use std::sync::mpsc;
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use crate::accel::{Hit, RayCaster};
+use crate::detection::{Detector, Echo};
+use crate::geometry::{DVec3, Ray};
+use crate::output::{PointRecord, PointSink};
+use crate::platform::FlightLine;
+use crate::radiometry::{Speckle, surface_return};
+use crate::rng::{Purpose, Stream};
+use crate::scanner::{BeamPattern, Mirror};
+use crate::scene::SurfaceClass;
+use crate::survey::Survey;
+use crate::waveform::{Receiver, Return, Waveform, range_to_bin};
+
+/// ASPRS class of an echo no surface contributed to (receiver noise).
+pub const NOISE_CLASS: u8 = 7;
+
+/// Pulses per parallel work unit.
+pub const BLOCK_PULSES: u64 = 2048;
+
+/// Counts gathered while simulating.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RunCounts {
+    /// Pulses emitted.
+    pub pulses: u64,
+    /// Points written.
+    pub points: u64,
+    /// Pulses with at least one echo.
+    pub pulses_with_echo: u64,
+    /// Points by return number (index 0 = first return).
+    pub points_by_return: [u64; 15],
+}
+
+impl RunCounts {
+    fn add(&mut self, o: &RunCounts) {
+        self.pulses += o.pulses;
+        self.points += o.points;
+        self.pulses_with_echo += o.pulses_with_echo;
+        for (a, b) in self.points_by_return.iter_mut().zip(o.points_by_return) {
+            *a += b;
+        }
+    }
+}
+
+/// Reusable per-thread buffers of the per-pulse computation.
+#[derive(Default)]
+pub struct Scratch {
+    local_dirs: Vec<DVec3>,
+    dirs: Vec<DVec3>,
+    hits: Vec<Option<Hit>>,
+    returns: Vec<Return>,
+    /// Primitive of each return (parallel to `returns`).
+    return_prims: Vec<u32>,
+    waveform: Waveform,
+    signal: Vec<f64>,
+    echoes: Vec<Echo>,
+    /// Energy per primitive within one echo.
+    energy_by_prim: Vec<(u32, f64)>,
+}
+
+impl Scratch {
+    /// The waveform of the last simulated pulse.
+    pub fn waveform(&self) -> &Waveform {
+        &self.waveform
+    }
+
+    /// The echoes of the last simulated pulse.
+    pub fn echoes(&self) -> &[Echo] {
+        &self.echoes
+    }
+
+    /// The sub-ray returns of the last simulated pulse.
+    pub fn returns(&self) -> &[Return] {
+        &self.returns
+    }
+}
+
+/// Everything needed to simulate pulses of one survey.
+pub struct Simulator<'a> {
+    survey: &'a Survey,
+    caster: &'a dyn RayCaster,
+    receiver: Receiver,
+    detector: Detector,
+    pattern: BeamPattern,
+    speckle: Option<Speckle>,
+    time_offset_s: f64,
+}
+
+impl<'a> Simulator<'a> {
+    /// Prepares the receiver, detector and beam pattern of `survey` over the
+    /// scene indexed by `caster`.
+    pub fn new(survey: &'a Survey, caster: &'a dyn RayCaster) -> Self {
+        let receiver = Receiver::new(survey.receiver.clone());
+        let detector = Detector::new(survey.detector.clone(), &receiver);
+        Self {
+            survey,
+            caster,
+            pattern: BeamPattern::new(survey.scanner.subrays, survey.scanner.divergence_rad),
+            speckle: survey.speckle_looks.and_then(Speckle::new),
+            receiver,
+            detector,
+            time_offset_s: survey.output.gps_start_time_s.unwrap_or(0.0),
+        }
+    }
+
+    /// The survey.
+    pub fn survey(&self) -> &Survey {
+        self.survey
+    }
+
+    /// The receiver.
+    pub fn receiver(&self) -> &Receiver {
+        &self.receiver
+    }
+
+    /// Time of emission of pulse `k` of `line` since the flight start, s
+    /// (`t_k = t_0 + k / PRF`, computed from the integer tick).
+    #[inline]
+    pub fn pulse_time(&self, line: &FlightLine, k: u64) -> f64 {
+        line.start_time_s + k as f64 / self.survey.scanner.prf_hz
+    }
+
+    /// Simulates pulse `k` of `line`, appending its points to `out`.
+    /// Returns the number of echoes.
+    pub fn simulate_pulse(
+        &self,
+        line: &FlightLine,
+        k: u64,
+        scratch: &mut Scratch,
+        out: &mut Vec<PointRecord>,
+    ) -> usize {
+        let s = self.survey;
+        let prf = s.scanner.prf_hz;
+        let t_line = k as f64 / prf;
+        let t = line.start_time_s + t_line;
+        let pose = line.pose_at(t_line);
+        let mirror = &s.scanner.mirror;
+        let theta = mirror.angle_at(t);
+        let rot = pose.attitude.scanner_to_world();
+        let origin = pose.position_m;
+        let central = rot * Mirror::beam_direction(theta);
+
+        // Sub-rays in the world frame, cast as one pulse.
+        self.pattern.directions(theta, &mut scratch.local_dirs);
+        scratch.dirs.clear();
+        scratch
+            .dirs
+            .extend(scratch.local_dirs.iter().map(|d| rot * *d));
+        scratch.hits.clear();
+        scratch.hits.resize(scratch.dirs.len(), None);
+        self.caster.cast_pulse(
+            origin,
+            &scratch.dirs,
+            s.scanner.min_range_m,
+            s.scanner.max_range_m,
+            &mut scratch.hits,
+        );
+
+        // Eq. 2 for every sub-ray that hit something.
+        let scene = self.caster.scene();
+        let mut speckle_rng = Stream::new(s.seed, line.index, k, Purpose::Speckle);
+        scratch.returns.clear();
+        scratch.return_prims.clear();
+        for ((hit, dir), share) in scratch
+            .hits
+            .iter()
+            .zip(&scratch.dirs)
+            .zip(self.pattern.weights())
+        {
+            let Some(hit) = hit else { continue };
+            let prim = &scene.primitives[hit.prim as usize];
+            let mat = &scene.materials[prim.material as usize];
+            let cos_inc = (-dir.dot(hit.normal)).clamp(0.0, 1.0);
+            let mut power = surface_return(
+                *share,
+                hit.t,
+                s.receiver.reference_range_m,
+                mat.reflectance,
+                cos_inc,
+                mat.incidence_exponent,
+            );
+            if let Some(sp) = &self.speckle {
+                power *= sp.factor(&mut speckle_rng);
+            }
+            scratch.returns.push(Return {
+                range_m: hit.t,
+                power,
+            });
+            scratch.return_prims.push(hit.prim);
+        }
+        if scratch.returns.is_empty() {
+            scratch.waveform.samples.clear();
+            scratch.echoes.clear();
+            return 0;
+        }
+
+        let mut noise_rng = Stream::new(s.seed, line.index, k, Purpose::ReceiverNoise);
+        self.receiver
+            .synthesize(&scratch.returns, &mut noise_rng, &mut scratch.waveform);
+        self.detector.detect(
+            &scratch.waveform,
+            &mut scratch.signal,
+            &mut scratch.echoes,
+        );
+        let n = scratch.echoes.len();
+        if n == 0 {
+            return 0;
+        }
+
+        // Attributes shared by the pulse's points.
+        let right = pose.attitude.body_to_world() * DVec3::X;
+        let right_h = DVec3::new(right.x, right.y, 0.0).normalize_or_zero();
+        let scan_angle_deg = central.dot(right_h).atan2(-central.z).to_degrees();
+        let moving_left = mirror.moving_left_at(t);
+        let edge = moving_left != mirror.moving_left_at(t + 1.0 / prf);
+        let bin_s = s.receiver.bin_s;
+
+        for (i, echo) in scratch.echoes.iter().enumerate() {
+            let position = origin + central * echo.range_m;
+            // Ground truth: the surface that put most energy into the echo.
+            let lo = echo.first_bin as f64;
+            let hi = echo.last_bin as f64 + 1.0;
+            scratch.energy_by_prim.clear();
+            for (r, &p) in scratch.returns.iter().zip(&scratch.return_prims) {
+                let b = range_to_bin(r.range_m, bin_s);
+                if b < lo || b >= hi {
+                    continue;
+                }
+                match scratch.energy_by_prim.iter_mut().find(|(q, _)| *q == p) {
+                    Some((_, e)) => *e += r.power,
+                    None => scratch.energy_by_prim.push((p, r.power)),
+                }
+            }
+            let best = scratch
+                .energy_by_prim
+                .iter()
+                .copied()
+                .reduce(|a, b| if b.1 > a.1 { b } else { a });
+            let (classification, object_id) = match best {
+                Some((p, _)) => {
+                    let prim = &scene.primitives[p as usize];
+                    let h = if prim.class == SurfaceClass::Vegetation {
+                        self.height_above_ground(position)
+                    } else {
+                        0.0
+                    };
+                    (prim.class.asprs_code(h), prim.object)
+                }
+                None => (NOISE_CLASS, u32::MAX),
+            };
+            out.push(PointRecord {
+                position_m: position,
+                gps_time_s: self.time_offset_s + t,
+                intensity: (s.intensity_gain * echo.amplitude).round().clamp(0.0, 65535.0) as u16,
+                amplitude: echo.amplitude,
+                echo_width_ns: echo.width_ns,
+                range_m: echo.range_m,
+                return_number: (i + 1) as u8,
+                number_of_returns: n as u8,
+                scan_direction_positive: !moving_left,
+                edge_of_flight_line: edge,
+                scan_angle_deg,
+                classification,
+                point_source_id: (line.index + 1).min(u16::MAX as u32) as u16,
+                pulse_index: k,
+                object_id,
+            });
+        }
+        n
+    }
+
+    /// Height of `p` above the ground-class surface beneath it (infinite
+    /// when there is none).
+    pub fn height_above_ground(&self, p: DVec3) -> f64 {
+        let ray = Ray {
+            origin: p + DVec3::Z * 0.01,
+            dir: -DVec3::Z,
+        };
+        self.caster
+            .closest_hit_where(&ray, 0.0, 1e5, &|prim| {
+                matches!(
+                    prim.class,
+                    SurfaceClass::Ground | SurfaceClass::Road | SurfaceClass::Water
+                )
+            })
+            .map_or(f64::INFINITY, |h| h.t - 0.01)
+    }
+
+    /// Simulates pulses `[k0, k1)` of `line`.
+    pub fn simulate_block(
+        &self,
+        line: &FlightLine,
+        k0: u64,
+        k1: u64,
+        scratch: &mut Scratch,
+    ) -> (Vec<PointRecord>, RunCounts) {
+        let mut points = Vec::with_capacity(((k1 - k0) as usize) * 2);
+        let mut counts = RunCounts::default();
+        for k in k0..k1 {
+            let n = self.simulate_pulse(line, k, scratch, &mut points);
+            counts.pulses += 1;
+            if n > 0 {
+                counts.pulses_with_echo += 1;
+            }
+        }
+        counts.points = points.len() as u64;
+        for p in &points {
+            counts.points_by_return[usize::from(p.return_number.clamp(1, 15)) - 1] += 1;
+        }
+        (points, counts)
+    }
+
+    /// Simulates every pulse of every flight line on `threads` worker
+    /// threads and writes the points, in pulse order, to `sinks`.
+    /// `progress` is called with the number of pulses done so far.
+    /// The sinks are not finished here.
+    pub fn run(
+        &self,
+        threads: usize,
+        sinks: &mut [Box<dyn PointSink>],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> io::Result<RunCounts> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads.max(1))
+            .build()
+            .map_err(io::Error::other)?;
+        let batch_blocks = 4 * threads.max(1) as u64;
+        let (tx, rx) = mpsc::sync_channel::<Vec<(Vec<PointRecord>, RunCounts)>>(2);
+        std::thread::scope(|scope| {
+            let writer = scope.spawn(move || -> io::Result<RunCounts> {
+                let mut total = RunCounts::default();
+                for batch in rx {
+                    for (points, counts) in batch {
+                        for sink in sinks.iter_mut() {
+                            sink.write(&points)?;
+                        }
+                        total.add(&counts);
+                    }
+                    progress(total.pulses);
+                }
+                Ok(total)
+            });
+            let mut send_failed = false;
+            'lines: for line in &self.survey.lines {
+                let n = self.survey.pulses_of(line);
+                let blocks = n.div_ceil(BLOCK_PULSES);
+                let mut b = 0;
+                while b < blocks {
+                    let b1 = (b + batch_blocks).min(blocks);
+                    let batch: Vec<_> = pool.install(|| {
+                        (b..b1)
+                            .into_par_iter()
+                            .map_init(Scratch::default, |scratch, blk| {
+                                let k0 = blk * BLOCK_PULSES;
+                                let k1 = (k0 + BLOCK_PULSES).min(n);
+                                self.simulate_block(line, k0, k1, scratch)
+                            })
+                            .collect()
+                    });
+                    if tx.send(batch).is_err() {
+                        send_failed = true;
+                        break 'lines;
+                    }
+                    b = b1;
+                }
+            }
+            drop(tx);
+            let result = writer
+                .join()
+                .unwrap_or_else(|_| Err(io::Error::other("the writer thread panicked")));
+            if send_failed && result.is_ok() {
+                return Err(io::Error::other("the writer thread stopped early"));
+            }
+            result
+        })
+    }
+}
+
+/// Wall-clock timing helper for summaries.
+#[derive(Debug)]
+pub struct Timer(Instant);
+
+impl Timer {
+    /// Starts timing.
+    pub fn start() -> Self {
+        Self(Instant::now())
+    }
+
+    /// Seconds since the start.
+    pub fn seconds(&self) -> f64 {
+        self.0.elapsed().as_secs_f64()
+    }
+}

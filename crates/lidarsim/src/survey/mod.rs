@@ -1,0 +1,898 @@
+//! Survey configuration: parse, validate, build the scene.
+//!
+//! Two layers (STYLE.md, "Two layers of arguments"): [`RawSurvey`] mirrors
+//! the TOML file; [`Survey`] is the checked form the simulator trusts, with
+//! units converted (degrees → radians, ns → s) and the [`Scene`] built.
+//! Every problem is reported as a [`Diagnostic`] naming the file, line,
+//! column and key; all problems found in one pass are reported together.
+
+mod locate;
+pub mod raw;
+
+pub use locate::{KeyPath, Locator, Seg};
+pub use raw::RawSurvey;
+
+use std::collections::HashMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use crate::detection::DetectorConfig;
+use crate::geometry::DVec3;
+use crate::platform::{FlightLine, Sway, SwayConfig};
+use crate::scanner::{Mirror, MirrorProfile};
+use crate::scene::{
+    Material, MeshPlacement, Polygon, Primitive, Scene, Shape, SurfaceClass, load_obj,
+};
+use crate::waveform::{PulseShape, ReceiverConfig};
+
+/// Seed used when the survey names none.
+pub const DEFAULT_SEED: u64 = 1;
+
+/// One problem in a survey file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Diagnostic {
+    /// The survey file (or `<demo>` for the built-in survey).
+    pub file: String,
+    /// 1-based line (0 when unknown).
+    pub line: usize,
+    /// 1-based column (0 when unknown).
+    pub column: usize,
+    /// The key the problem is about (`scanner.prf_hz`).
+    pub key: String,
+    /// What is wrong, and what would be right.
+    pub message: String,
+    /// The offending line of the file.
+    pub source_line: Option<String>,
+}
+
+impl fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.file)?;
+        if self.line > 0 {
+            write!(f, ":{}:{}", self.line, self.column)?;
+        }
+        if self.key.is_empty() {
+            write!(f, ": {}", self.message)?;
+        } else {
+            write!(f, ": key `{}`: {}", self.key, self.message)?;
+        }
+        if let Some(src) = &self.source_line {
+            let gutter = self.line.to_string();
+            write!(f, "\n {gutter} | {src}")?;
+            if self.column > 0 {
+                let pad = " ".repeat(gutter.len());
+                write!(f, "\n {pad} | {}^", " ".repeat(self.column - 1))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A survey that could not be loaded: one or more diagnostics.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurveyError {
+    /// All problems found.
+    pub diagnostics: Vec<Diagnostic>,
+}
+
+impl fmt::Display for SurveyError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, d) in self.diagnostics.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            write!(f, "{d}")?;
+        }
+        Ok(())
+    }
+}
+
+impl std::error::Error for SurveyError {}
+
+/// Scanner settings after validation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ScannerSettings {
+    /// Pulse repetition frequency, Hz.
+    pub prf_hz: f64,
+    /// The oscillating mirror.
+    pub mirror: Mirror,
+    /// Full beam divergence, rad.
+    pub divergence_rad: f64,
+    /// Sub-rays per pulse.
+    pub subrays: usize,
+    /// Closest range the receiver records, m.
+    pub min_range_m: f64,
+    /// Farthest range the receiver records, m.
+    pub max_range_m: f64,
+    /// Laser wavelength, nm (recorded in the summary).
+    pub wavelength_nm: f64,
+}
+
+/// Which files to write.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Formats {
+    /// `points.las`.
+    pub las: bool,
+    /// `points.xyz`.
+    pub xyz: bool,
+}
+
+/// Output settings after validation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct OutputSettings {
+    /// Point formats.
+    pub formats: Formats,
+    /// Interval between rows of `trajectory.csv`, s.
+    pub trajectory_interval_s: f64,
+    /// When set, GPS times are Adjusted Standard GPS Time and the flight
+    /// starts at this value (s); otherwise they are seconds since the start
+    /// of the flight.
+    pub gps_start_time_s: Option<f64>,
+    /// LAS coordinate resolution, m.
+    pub las_scale_m: f64,
+}
+
+/// A validated survey with its scene.
+#[derive(Clone, Debug)]
+pub struct Survey {
+    /// Seed of all random streams.
+    pub seed: u64,
+    /// Laser, mirror and beam.
+    pub scanner: ScannerSettings,
+    /// Receiver (sampling, pulse, noise).
+    pub receiver: ReceiverConfig,
+    /// Echo detection.
+    pub detector: DetectorConfig,
+    /// Speckle looks when speckle is on.
+    pub speckle_looks: Option<f64>,
+    /// LAS intensity per unit of echo energy amplitude.
+    pub intensity_gain: f64,
+    /// Attitude sway settings when sway is on.
+    pub sway: Option<SwayConfig>,
+    /// Time between the end of one line and the start of the next, s.
+    pub turn_time_s: f64,
+    /// Flight lines in flight order (sway seeded per line).
+    pub lines: Vec<FlightLine>,
+    /// What to write.
+    pub output: OutputSettings,
+    /// The surfaces.
+    pub scene: Scene,
+    /// The raw form it was built from (for the summary and `--export`).
+    pub raw: RawSurvey,
+    /// The file it was read from, if any.
+    pub source: Option<PathBuf>,
+}
+
+/// Collects problems with their key paths during validation.
+struct Checker {
+    problems: Vec<(KeyPath, String)>,
+}
+
+impl Checker {
+    fn err(&mut self, path: KeyPath, msg: impl Into<String>) {
+        self.problems.push((path, msg.into()));
+    }
+
+    /// A finite number in `[lo, hi]` (open at the ends where `*_open`).
+    #[allow(clippy::too_many_arguments)]
+    fn number(
+        &mut self,
+        path: KeyPath,
+        value: Option<f64>,
+        default: f64,
+        lo: f64,
+        lo_open: bool,
+        hi: f64,
+        unit: &str,
+    ) -> f64 {
+        let v = value.unwrap_or(default);
+        let below = if lo_open { v <= lo } else { v < lo };
+        if !v.is_finite() || below || v > hi {
+            let range = match (lo_open, hi.is_finite()) {
+                (true, false) => format!("must be greater than {lo}{unit}"),
+                (false, false) => format!("must be at least {lo}{unit}"),
+                (true, true) => format!("must be greater than {lo} and at most {hi}{unit}"),
+                (false, true) => format!("must be between {lo} and {hi}{unit}"),
+            };
+            self.err(path, format!("{range}, got {v}"));
+            return default;
+        }
+        v
+    }
+
+    fn positive(&mut self, path: KeyPath, value: Option<f64>, default: f64, unit: &str) -> f64 {
+        self.number(path, value, default, 0.0, true, f64::INFINITY, unit)
+    }
+
+    fn count(&mut self, path: KeyPath, value: Option<i64>, default: i64, lo: i64, hi: i64) -> i64 {
+        let v = value.unwrap_or(default);
+        if v < lo || v > hi {
+            self.err(path, format!("must be a whole number from {lo} to {hi}, got {v}"));
+            return default;
+        }
+        v
+    }
+
+    fn point(&mut self, path: KeyPath, value: &Option<Vec<f64>>) -> Option<DVec3> {
+        match value {
+            None => {
+                self.err(path, "is required: a point [x, y, z] in metres");
+                None
+            }
+            Some(v) if v.len() != 3 => {
+                self.err(path, format!("must be [x, y, z] (3 numbers), got {} numbers", v.len()));
+                None
+            }
+            Some(v) if v.iter().any(|x| !x.is_finite()) => {
+                self.err(path, "must hold finite numbers");
+                None
+            }
+            Some(v) => Some(DVec3::new(v[0], v[1], v[2])),
+        }
+    }
+
+    fn class(&mut self, path: KeyPath, value: &Option<String>) -> SurfaceClass {
+        match value {
+            None => SurfaceClass::Unclassified,
+            Some(s) => SurfaceClass::from_name(s).unwrap_or_else(|| {
+                let names: Vec<&str> = SurfaceClass::ALL.iter().map(|(n, _)| *n).collect();
+                self.err(
+                    path,
+                    format!("unknown class '{s}'; expected one of: {}", names.join(", ")),
+                );
+                SurfaceClass::Unclassified
+            }),
+        }
+    }
+}
+
+impl Survey {
+    /// Reads and validates a survey file. Mesh paths are relative to it.
+    pub fn load(path: &Path) -> Result<Self, SurveyError> {
+        let file = path.display().to_string();
+        let text = std::fs::read(path).map_err(|e| SurveyError {
+            diagnostics: vec![Diagnostic {
+                file: file.clone(),
+                line: 0,
+                column: 0,
+                key: String::new(),
+                message: format!("cannot read the survey file: {e}"),
+                source_line: None,
+            }],
+        })?;
+        let text = String::from_utf8(text).map_err(|e| {
+            let offset = e.utf8_error().valid_up_to();
+            let prefix = String::from_utf8_lossy(&e.as_bytes()[..offset]).into_owned();
+            let line = prefix.matches('\n').count() + 1;
+            SurveyError {
+                diagnostics: vec![Diagnostic {
+                    file: file.clone(),
+                    line,
+                    column: 0,
+                    key: String::new(),
+                    message: format!("the file is not valid UTF-8 (byte {offset})"),
+                    source_line: None,
+                }],
+            }
+        })?;
+        Self::from_toml(&text, Some(path))
+    }
+
+    /// Parses and validates survey text; `path` (if any) names the file in
+    /// messages and anchors relative mesh paths.
+    pub fn from_toml(text: &str, path: Option<&Path>) -> Result<Self, SurveyError> {
+        let file = path.map_or_else(|| "<survey>".to_string(), |p| p.display().to_string());
+        let locator = Locator::new(text);
+        let raw: RawSurvey = toml::from_str(text).map_err(|e| {
+            let span = e.span().unwrap_or(0..0);
+            let key = locator.path_at(&span).to_string();
+            let (line, column) = locator.line_col(span.start);
+            SurveyError {
+                diagnostics: vec![Diagnostic {
+                    file: file.clone(),
+                    line,
+                    column,
+                    key,
+                    message: e.message().trim().to_string(),
+                    source_line: Some(locator.line_text(line).to_string()),
+                }],
+            }
+        })?;
+        Self::from_raw(raw, path).map_err(|problems| SurveyError {
+            diagnostics: problems
+                .into_iter()
+                .map(|(key, message)| {
+                    let (line, column) = locator
+                        .span_of(&key)
+                        .map_or((0, 0), |s| locator.line_col(s.start));
+                    Diagnostic {
+                        file: file.clone(),
+                        line,
+                        column,
+                        key: key.to_string(),
+                        message,
+                        source_line: (line > 0).then(|| locator.line_text(line).to_string()),
+                    }
+                })
+                .collect(),
+        })
+    }
+
+    /// Validates a raw survey; on failure returns every problem with its
+    /// key path.
+    pub fn from_raw(raw: RawSurvey, path: Option<&Path>) -> Result<Self, Vec<(KeyPath, String)>> {
+        let mut c = Checker {
+            problems: Vec::new(),
+        };
+        let root = KeyPath::root();
+        let seed = raw.seed.unwrap_or(DEFAULT_SEED);
+
+        // [scanner]
+        let s = &raw.scanner;
+        let sp = root.key("scanner");
+        let prf_hz = c.positive(sp.key("prf_hz"), s.prf_hz, 100_000.0, " Hz");
+        let scan_frequency_hz =
+            c.positive(sp.key("scan_frequency_hz"), s.scan_frequency_hz, 50.0, " Hz");
+        let scan_angle_deg = c.number(
+            sp.key("scan_angle_deg"),
+            s.scan_angle_deg,
+            20.0,
+            0.0,
+            false,
+            89.0,
+            "°",
+        );
+        let profile = match s.mirror.as_deref() {
+            None | Some("triangle") => MirrorProfile::Triangle,
+            Some("sine") | Some("sinusoidal") => MirrorProfile::Sine,
+            Some(other) => {
+                c.err(
+                    sp.key("mirror"),
+                    format!("unknown mirror '{other}'; expected \"triangle\" or \"sine\""),
+                );
+                MirrorProfile::Triangle
+            }
+        };
+        let divergence_mrad = c.number(
+            sp.key("divergence_mrad"),
+            s.divergence_mrad,
+            0.3,
+            0.0,
+            false,
+            100.0,
+            " mrad",
+        );
+        let subrays = c.count(sp.key("subrays"), s.subrays, 19, 1, 10_000) as usize;
+        let pulse_fwhm_ns = c.number(
+            sp.key("pulse_fwhm_ns"),
+            s.pulse_fwhm_ns,
+            4.0,
+            0.0,
+            true,
+            1000.0,
+            " ns",
+        );
+        let pulse = match s.pulse_shape.as_deref() {
+            None | Some("gaussian") => PulseShape::Gaussian {
+                fwhm_s: pulse_fwhm_ns * 1e-9,
+            },
+            Some("rise-tail") | Some("rise_tail") => PulseShape::RiseTail {
+                fwhm_s: pulse_fwhm_ns * 1e-9,
+            },
+            Some(other) => {
+                c.err(
+                    sp.key("pulse_shape"),
+                    format!("unknown pulse shape '{other}'; expected \"gaussian\" or \"rise-tail\""),
+                );
+                PulseShape::Gaussian {
+                    fwhm_s: pulse_fwhm_ns * 1e-9,
+                }
+            }
+        };
+        let max_returns = c.count(sp.key("max_returns"), s.max_returns, 5, 1, 15) as usize;
+        let min_range_m = c.number(
+            sp.key("min_range_m"),
+            s.min_range_m,
+            1.0,
+            0.0,
+            false,
+            f64::INFINITY,
+            " m",
+        );
+        let max_range_m = c.positive(sp.key("max_range_m"), s.max_range_m, 10_000.0, " m");
+        if max_range_m <= min_range_m {
+            c.err(
+                sp.key("max_range_m"),
+                format!("must be greater than min_range_m ({min_range_m} m)"),
+            );
+        }
+        let reference_range_m = c.positive(
+            sp.key("reference_range_m"),
+            s.reference_range_m,
+            1000.0,
+            " m",
+        );
+        let wavelength_nm = c.positive(sp.key("wavelength_nm"), s.wavelength_nm, 1064.0, " nm");
+
+        // [receiver]
+        let r = &raw.receiver;
+        let rp = root.key("receiver");
+        let bin_ps = c.number(rp.key("bin_ps"), r.bin_ps, 500.0, 0.0, true, 1e6, " ps");
+        let noise = c.number(rp.key("noise"), r.noise, 0.0, 0.0, false, f64::INFINITY, "");
+        let atmosphere = c.number(
+            rp.key("atmosphere"),
+            r.atmosphere,
+            0.0,
+            0.0,
+            false,
+            f64::INFINITY,
+            "",
+        );
+        let speckle_looks = c.positive(rp.key("speckle_looks"), r.speckle_looks, 1.0, "");
+        let threshold_sigma = c.positive(rp.key("threshold_sigma"), r.threshold_sigma, 4.0, "");
+        let min_amplitude = c.positive(rp.key("min_amplitude"), r.min_amplitude, 0.005, "");
+        let intensity_gain = c.positive(rp.key("intensity_gain"), r.intensity_gain, 10_000.0, "");
+        if bin_ps * 1e-3 > pulse_fwhm_ns {
+            c.err(
+                rp.key("bin_ps"),
+                format!(
+                    "a {bin_ps} ps bin cannot sample a {pulse_fwhm_ns} ns pulse; use a bin at \
+                     most the pulse width"
+                ),
+            );
+        }
+
+        // [platform]
+        let p = &raw.platform;
+        let pp = root.key("platform");
+        let sway_on = p.sway.unwrap_or(false);
+        let d = SwayConfig::default();
+        let roll = c.number(
+            pp.key("roll_amplitude_deg"),
+            p.roll_amplitude_deg,
+            d.roll_amplitude_rad.to_degrees(),
+            0.0,
+            false,
+            30.0,
+            "°",
+        );
+        let pitch = c.number(
+            pp.key("pitch_amplitude_deg"),
+            p.pitch_amplitude_deg,
+            d.pitch_amplitude_rad.to_degrees(),
+            0.0,
+            false,
+            30.0,
+            "°",
+        );
+        let yaw = c.number(
+            pp.key("yaw_amplitude_deg"),
+            p.yaw_amplitude_deg,
+            d.yaw_amplitude_rad.to_degrees(),
+            0.0,
+            false,
+            30.0,
+            "°",
+        );
+        let freqs = match &p.sway_frequencies_hz {
+            None => d.frequencies_hz.clone(),
+            Some(f) if f.is_empty() || f.iter().any(|x| !(x.is_finite() && *x > 0.0)) => {
+                c.err(
+                    pp.key("sway_frequencies_hz"),
+                    "must be a non-empty list of frequencies greater than 0 Hz",
+                );
+                d.frequencies_hz.clone()
+            }
+            Some(f) => f.clone(),
+        };
+        let sway = sway_on.then(|| SwayConfig {
+            roll_amplitude_rad: roll.to_radians(),
+            pitch_amplitude_rad: pitch.to_radians(),
+            yaw_amplitude_rad: yaw.to_radians(),
+            frequencies_hz: freqs,
+        });
+        let turn_time_s = c.number(
+            pp.key("turn_time_s"),
+            p.turn_time_s,
+            30.0,
+            0.0,
+            false,
+            f64::INFINITY,
+            " s",
+        );
+
+        // [[flight_line]]
+        let mut lines = Vec::new();
+        if raw.flight_lines.is_empty() {
+            c.err(
+                root.key("flight_line"),
+                "the survey needs at least one [[flight_line]] with start_m, end_m and speed_mps",
+            );
+        }
+        let mut t = 0.0;
+        for (i, l) in raw.flight_lines.iter().enumerate() {
+            let lp = root.key("flight_line").index(i);
+            let start = c.point(lp.key("start_m"), &l.start_m);
+            let end = c.point(lp.key("end_m"), &l.end_m);
+            let speed = c.positive(lp.key("speed_mps"), l.speed_mps, 60.0, " m/s");
+            if l.speed_mps.is_none() {
+                c.err(lp.key("speed_mps"), "is required: ground speed in m/s");
+            }
+            let altitude = l.altitude_m.map(|a| {
+                c.number(lp.key("altitude_m"), Some(a), 0.0, -1e4, false, 1e5, " m")
+            });
+            let (Some(mut start), Some(mut end)) = (start, end) else {
+                continue;
+            };
+            if let Some(a) = altitude {
+                start.z = a;
+                end.z = a;
+            }
+            if (end - start).length() < 1e-6 {
+                c.err(lp.key("end_m"), "must differ from start_m: the line has no length");
+                continue;
+            }
+            let index = lines.len() as u32;
+            let line = FlightLine {
+                index,
+                start_m: start,
+                end_m: end,
+                speed_mps: speed,
+                start_time_s: t,
+                sway: sway.as_ref().map(|cfg| Sway::new(cfg, seed, index)),
+            };
+            t += line.duration_s() + turn_time_s;
+            lines.push(line);
+        }
+
+        // [output]
+        let o = &raw.output;
+        let op = root.key("output");
+        let mut formats = Formats {
+            las: false,
+            xyz: false,
+        };
+        match &o.formats {
+            None => formats.las = true,
+            Some(list) => {
+                for (i, f) in list.iter().enumerate() {
+                    match f.as_str() {
+                        "las" => formats.las = true,
+                        "xyz" => formats.xyz = true,
+                        other => c.err(
+                            op.key("formats").index(i),
+                            format!("unknown format '{other}'; expected \"las\" or \"xyz\""),
+                        ),
+                    }
+                }
+            }
+        }
+        let trajectory_interval_s = c.positive(
+            op.key("trajectory_interval_s"),
+            o.trajectory_interval_s,
+            0.001,
+            " s",
+        );
+        let gps_start_time_s = o.gps_start_time_s.map(|g| {
+            c.number(
+                op.key("gps_start_time_s"),
+                Some(g),
+                0.0,
+                0.0,
+                false,
+                1e10,
+                " s",
+            )
+        });
+        let las_scale_m = c.number(op.key("las_scale_m"), o.las_scale_m, 0.001, 0.0, true, 1.0, " m");
+
+        // [materials]
+        let mut materials: HashMap<String, Material> = HashMap::new();
+        for (name, m) in &raw.materials {
+            let mp = root.key("materials").key(name);
+            if m.reflectance.is_none() {
+                c.err(mp.key("reflectance"), "is required: reflectance from 0 to 1");
+            }
+            let reflectance = c.number(
+                mp.key("reflectance"),
+                m.reflectance,
+                0.0,
+                0.0,
+                false,
+                1.0,
+                "",
+            );
+            let incidence_exponent = c.number(
+                mp.key("incidence_exponent"),
+                m.incidence_exponent,
+                1.0,
+                0.0,
+                false,
+                1000.0,
+                "",
+            );
+            materials.insert(
+                name.clone(),
+                Material {
+                    name: name.clone(),
+                    reflectance,
+                    incidence_exponent,
+                },
+            );
+        }
+        let known = |materials: &HashMap<String, Material>| {
+            let mut names: Vec<&String> = materials.keys().collect();
+            names.sort();
+            if names.is_empty() {
+                "no [materials.NAME] table is defined".to_string()
+            } else {
+                format!(
+                    "defined: {}",
+                    names
+                        .iter()
+                        .map(|s| s.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            }
+        };
+
+        // Scene: polygons, then meshes.
+        let mut scene = Scene::default();
+        for (i, poly) in raw.polygons.iter().enumerate() {
+            let pp = root.key("polygon").index(i);
+            let class = c.class(pp.key("class"), &poly.class);
+            let material = match &poly.material {
+                None => {
+                    c.err(pp.key("material"), "is required: the name of a [materials.NAME] table");
+                    None
+                }
+                Some(m) => match materials.get(m) {
+                    Some(mat) => Some(mat.clone()),
+                    None => {
+                        c.err(
+                            pp.key("material"),
+                            format!("unknown material '{m}' ({})", known(&materials)),
+                        );
+                        None
+                    }
+                },
+            };
+            let vertices = match &poly.vertices_m {
+                None => {
+                    c.err(pp.key("vertices_m"), "is required: a list of [x, y, z] points");
+                    None
+                }
+                Some(vs) => {
+                    let mut ok = Vec::with_capacity(vs.len());
+                    for (j, v) in vs.iter().enumerate() {
+                        if let Some(p) = c.point(pp.key("vertices_m").index(j), &Some(v.clone())) {
+                            ok.push(p);
+                        }
+                    }
+                    (ok.len() == vs.len()).then_some(ok)
+                }
+            };
+            let Some(vertices) = vertices else { continue };
+            match Polygon::new(vertices) {
+                Ok(poly) => {
+                    if let Some(mat) = material {
+                        let m = scene.add_material(mat);
+                        let object = scene.add_object(format!("polygon[{i}]"));
+                        scene.primitives.push(Primitive {
+                            shape: Shape::Polygon(Box::new(poly)),
+                            material: m,
+                            class,
+                            object,
+                        });
+                    }
+                }
+                Err(e) => c.err(pp.key("vertices_m"), e.to_string()),
+            }
+        }
+        let base = path
+            .and_then(|p| p.parent())
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        for (i, mesh) in raw.meshes.iter().enumerate() {
+            let mp = root.key("mesh").index(i);
+            let class = c.class(mp.key("class"), &mesh.class);
+            let offset = match &mesh.offset_m {
+                None => Some(DVec3::ZERO),
+                some => c.point(mp.key("offset_m"), some),
+            };
+            let scale = c.positive(mp.key("scale"), mesh.scale, 1.0, "");
+            let rotation = c.number(
+                mp.key("rotation_z_deg"),
+                mesh.rotation_z_deg,
+                0.0,
+                -360.0,
+                false,
+                360.0,
+                "°",
+            );
+            let default_material = match &mesh.material {
+                None => None,
+                Some(m) => match materials.get(m) {
+                    Some(mat) => Some(mat.clone()),
+                    None => {
+                        c.err(
+                            mp.key("material"),
+                            format!("unknown material '{m}' ({})", known(&materials)),
+                        );
+                        continue;
+                    }
+                },
+            };
+            let Some(file) = &mesh.file else {
+                c.err(mp.key("file"), "is required: path of an OBJ file");
+                continue;
+            };
+            let Some(offset) = offset else { continue };
+            let placement = MeshPlacement {
+                scale,
+                rotation_z_rad: rotation.to_radians(),
+                offset_m: offset,
+                default_class: class,
+                default_material,
+            };
+            let full = base.join(file);
+            if let Err(e) = load_obj(&full, &placement, &materials, &mut scene) {
+                c.err(mp.key("file"), e.to_string());
+            }
+        }
+        if scene.primitives.is_empty() && c.problems.is_empty() {
+            c.err(
+                root,
+                "the scene is empty: add [[polygon]] or [[mesh]] entries for the laser to hit",
+            );
+        }
+
+        if !c.problems.is_empty() {
+            return Err(c.problems);
+        }
+        Ok(Survey {
+            seed,
+            scanner: ScannerSettings {
+                prf_hz,
+                mirror: Mirror {
+                    profile,
+                    scan_frequency_hz,
+                    scan_half_angle_rad: scan_angle_deg.to_radians(),
+                },
+                divergence_rad: divergence_mrad * 1e-3,
+                subrays,
+                min_range_m,
+                max_range_m,
+                wavelength_nm,
+            },
+            receiver: ReceiverConfig {
+                bin_s: bin_ps * 1e-12,
+                pulse,
+                noise_sigma: noise,
+                atmosphere,
+                reference_range_m,
+            },
+            detector: DetectorConfig {
+                threshold_sigma,
+                min_amplitude,
+                max_returns,
+            },
+            speckle_looks: r.speckle.unwrap_or(false).then_some(speckle_looks),
+            intensity_gain,
+            sway,
+            turn_time_s,
+            lines,
+            output: OutputSettings {
+                formats,
+                trajectory_interval_s,
+                gps_start_time_s,
+                las_scale_m,
+            },
+            scene,
+            raw,
+            source: path.map(Path::to_path_buf),
+        })
+    }
+
+    /// Replaces the seed (command-line `--seed`), re-seeding the sway.
+    pub fn set_seed(&mut self, seed: u64) {
+        self.seed = seed;
+        self.raw.seed = Some(seed);
+        if let Some(cfg) = &self.sway {
+            for l in &mut self.lines {
+                l.sway = Some(Sway::new(cfg, seed, l.index));
+            }
+        }
+    }
+
+    /// Number of pulses of a flight line: ticks `k = 0, 1, …` while
+    /// `k / PRF` is before the end of the line.
+    pub fn pulses_of(&self, line: &FlightLine) -> u64 {
+        (line.duration_s() * self.scanner.prf_hz).ceil().max(0.0) as u64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MINIMAL: &str = r#"
+[[flight_line]]
+start_m = [0.0, -100.0, 500.0]
+end_m = [0.0, 100.0, 500.0]
+speed_mps = 50.0
+
+[materials.grass]
+reflectance = 0.4
+
+[[polygon]]
+material = "grass"
+class = "ground"
+vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
+"#;
+
+    #[test]
+    fn defaults_fill_a_minimal_survey() {
+        let s = Survey::from_toml(MINIMAL, None).unwrap();
+        assert_eq!(s.scanner.prf_hz, 100_000.0);
+        assert_eq!(s.scanner.subrays, 19);
+        assert_eq!(s.receiver.bin_s, 500e-12);
+        assert_eq!(s.lines.len(), 1);
+        assert_eq!(s.pulses_of(&s.lines[0]), 400_000);
+        assert_eq!(s.scene.primitives.len(), 1);
+        assert!(s.output.formats.las && !s.output.formats.xyz);
+    }
+
+    fn diagnostics(text: &str) -> Vec<Diagnostic> {
+        Survey::from_toml(text, Some(Path::new("s.toml")))
+            .unwrap_err()
+            .diagnostics
+    }
+
+    #[test]
+    fn problems_name_line_and_key() {
+        let bad = MINIMAL.replace("speed_mps = 50.0", "speed_mps = -5.0");
+        let d = diagnostics(&bad);
+        assert_eq!(d.len(), 1);
+        assert_eq!(d[0].key, "flight_line[0].speed_mps");
+        assert_eq!(d[0].line, 5);
+        assert!(d[0].message.contains("greater than 0"));
+        let text = d[0].to_string();
+        assert!(text.starts_with("s.toml:5:13: key `flight_line[0].speed_mps`"), "{text}");
+
+        let unknown = format!("[scanner]\nprff_hz = 3\n{MINIMAL}");
+        let d = diagnostics(&unknown);
+        assert_eq!(d[0].line, 2);
+        assert!(d[0].message.contains("prff_hz"), "{}", d[0].message);
+        assert!(d[0].key.contains("scanner"), "{}", d[0].key);
+
+        let wrong_type = format!("[scanner]\nprf_hz = \"fast\"\n{MINIMAL}");
+        let d = diagnostics(&wrong_type);
+        assert_eq!((d[0].line, d[0].key.as_str()), (2, "scanner.prf_hz"));
+
+        let several = format!(
+            "[scanner]\nprf_hz = 0\nsubrays = 0\n{}",
+            MINIMAL.replace("\"grass\"\nclass", "\"gras\"\nclass")
+        );
+        let d = diagnostics(&several);
+        let keys: Vec<&str> = d.iter().map(|d| d.key.as_str()).collect();
+        assert_eq!(keys, ["scanner.prf_hz", "scanner.subrays", "polygon[0].material"]);
+        assert!(d[2].message.contains("defined: grass"));
+    }
+
+    #[test]
+    fn bad_polygons_are_reported() {
+        let empty = MINIMAL.replace(
+            "vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]",
+            "vertices_m = []",
+        );
+        let d = diagnostics(&empty);
+        assert_eq!(d[0].key, "polygon[0].vertices_m");
+        assert!(d[0].message.contains("at least 3"));
+        let warped = MINIMAL.replace("[300, 300, 0]", "[300, 300, 5]");
+        let d = diagnostics(&warped);
+        assert!(d[0].message.contains("not planar"), "{}", d[0].message);
+        assert_eq!(d[0].line, 13);
+    }
+}

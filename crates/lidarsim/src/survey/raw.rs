@@ -1,0 +1,192 @@
+//! The survey file as written: plain serde mirrors of the TOML tables.
+//!
+//! Every key is optional here (except where a table makes no sense without
+//! it); defaults and range checks live in the validation step
+//! ([`super::Survey::from_raw`]), which can then report all problems with
+//! their keys at once. Integers that must be positive are read as `i64`
+//! so that a negative value gets our message rather than the parser's.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// Top level of a survey file.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RawSurvey {
+    /// Seed of all random streams.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// `[scanner]`.
+    #[serde(default)]
+    pub scanner: RawScanner,
+    /// `[receiver]`.
+    #[serde(default)]
+    pub receiver: RawReceiver,
+    /// `[platform]`.
+    #[serde(default)]
+    pub platform: RawPlatform,
+    /// `[output]`.
+    #[serde(default)]
+    pub output: RawOutput,
+    /// `[[flight_line]]`.
+    #[serde(default, rename = "flight_line")]
+    pub flight_lines: Vec<RawFlightLine>,
+    /// `[materials.NAME]`.
+    #[serde(default)]
+    pub materials: BTreeMap<String, RawMaterial>,
+    /// `[[polygon]]`.
+    #[serde(default, rename = "polygon", skip_serializing_if = "Vec::is_empty")]
+    pub polygons: Vec<RawPolygon>,
+    /// `[[mesh]]`.
+    #[serde(default, rename = "mesh", skip_serializing_if = "Vec::is_empty")]
+    pub meshes: Vec<RawMesh>,
+}
+
+/// `[scanner]`: the laser, mirror and beam.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawScanner {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prf_hz: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scan_frequency_hz: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scan_angle_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mirror: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub divergence_mrad: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub subrays: Option<i64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pulse_fwhm_ns: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pulse_shape: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_returns: Option<i64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_range_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_range_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference_range_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_nm: Option<f64>,
+}
+
+/// `[receiver]`: sampling, noise and detection.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawReceiver {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bin_ps: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub atmosphere: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speckle: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speckle_looks: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub threshold_sigma: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_amplitude: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub intensity_gain: Option<f64>,
+}
+
+/// `[platform]`: attitude sway and turns.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawPlatform {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sway: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub roll_amplitude_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pitch_amplitude_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub yaw_amplitude_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sway_frequencies_hz: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub turn_time_s: Option<f64>,
+}
+
+/// `[[flight_line]]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawFlightLine {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub start_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub end_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub altitude_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_mps: Option<f64>,
+}
+
+/// `[output]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawOutput {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub formats: Option<Vec<String>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trajectory_interval_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub gps_start_time_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub las_scale_m: Option<f64>,
+}
+
+/// `[materials.NAME]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawMaterial {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reflectance: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub incidence_exponent: Option<f64>,
+}
+
+/// `[[polygon]]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawPolygon {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub class: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vertices_m: Option<Vec<Vec<f64>>>,
+}
+
+/// `[[mesh]]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawMesh {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub scale: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rotation_z_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub class: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+}
