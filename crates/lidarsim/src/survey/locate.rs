@@ -119,45 +119,48 @@ impl<'a> Locator<'a> {
     }
 
     /// The deepest key path whose key or value contains the byte range.
+    /// (The span toml gives a table is that of its `[header]`, not of its
+    /// body, so tables and arrays are searched whatever their span.)
     pub fn path_at(&self, span: &Range<usize>) -> KeyPath {
-        fn walk_table(
-            t: &DeTable<'_>,
-            span: &Range<usize>,
-            path: KeyPath,
-            best: &mut KeyPath,
-        ) {
-            for (k, v) in t.iter() {
-                let ks = k.span();
-                let vs = v.span();
-                let inside = |r: &Range<usize>| r.start <= span.start && span.end <= r.end.max(r.start + 1);
-                if inside(&ks) || inside(&vs) {
-                    let p = path.key(k.get_ref());
-                    *best = p.clone();
-                    walk_value(v.get_ref(), span, p, best);
-                }
-            }
+        fn contains(r: &Range<usize>, span: &Range<usize>) -> bool {
+            r.start <= span.start && span.end <= r.end.max(r.start + 1)
         }
-        fn walk_value(v: &DeValue<'_>, span: &Range<usize>, path: KeyPath, best: &mut KeyPath) {
+        fn walk(v: &DeValue<'_>, span: &Range<usize>, path: &KeyPath, best: &mut (usize, KeyPath)) {
             match v {
-                DeValue::Table(t) => walk_table(t, span, path, best),
+                DeValue::Table(t) => {
+                    for (k, v) in t.iter() {
+                        let p = path.key(k.get_ref());
+                        if contains(&k.span(), span) || contains(&v.span(), span) {
+                            if p.0.len() > best.0 {
+                                *best = (p.0.len(), p.clone());
+                            }
+                        }
+                        walk(v.get_ref(), span, &p, best);
+                    }
+                }
                 DeValue::Array(a) => {
                     for (i, e) in a.iter().enumerate() {
-                        let es = e.span();
-                        if es.start <= span.start && span.end <= es.end.max(es.start + 1) {
-                            let p = path.index(i);
-                            *best = p.clone();
-                            walk_value(e.get_ref(), span, p, best);
+                        let p = path.index(i);
+                        if contains(&e.span(), span) && p.0.len() > best.0 {
+                            *best = (p.0.len(), p.clone());
                         }
+                        walk(e.get_ref(), span, &p, best);
                     }
                 }
                 _ => {}
             }
         }
-        let mut best = KeyPath::root();
+        let mut best = (0, KeyPath::root());
         if let Some(root) = &self.root {
-            walk_table(root.get_ref(), span, KeyPath::root(), &mut best);
+            for (k, v) in root.get_ref().iter() {
+                let p = KeyPath::root().key(k.get_ref());
+                if (contains(&k.span(), span) || contains(&v.span(), span)) && best.0 < 1 {
+                    best = (1, p.clone());
+                }
+                walk(v.get_ref(), span, &p, &mut best);
+            }
         }
-        best
+        best.1
     }
 }
 

@@ -284,8 +284,22 @@ impl Survey {
         let file = path.map_or_else(|| "<survey>".to_string(), |p| p.display().to_string());
         let locator = Locator::new(text);
         let raw: RawSurvey = toml::from_str(text).map_err(|e| {
-            let span = e.span().unwrap_or(0..0);
-            let key = locator.path_at(&span).to_string();
+            let mut span = e.span().unwrap_or(0..0);
+            let mut key = locator.path_at(&span);
+            // An unknown key is reported at its table's header: point at
+            // the key itself instead.
+            if let Some(name) = e
+                .message()
+                .strip_prefix("unknown field `")
+                .and_then(|rest| rest.split('`').next())
+            {
+                let candidate = key.key(name);
+                if let Some(s) = locator.span_of(&candidate) {
+                    span = s;
+                    key = candidate;
+                }
+            }
+            let key = key.to_string();
             let (line, column) = locator.line_col(span.start);
             SurveyError {
                 diagnostics: vec![Diagnostic {
