@@ -191,8 +191,14 @@ fn check(survey: &Survey) {
     println!("pulses:               {}", p.pulses);
     println!("flight time:          {:.1} s", p.flight_time_s);
     println!("swath width:          {:.1} m", p.swath_width_m);
-    println!("point density:        {:.2} points/m² per line", p.point_density_per_m2);
-    println!("footprint diameter:   {:.3} m at nadir", p.footprint_diameter_m);
+    println!(
+        "point density:        {:.2} points/m² per line",
+        p.point_density_per_m2
+    );
+    println!(
+        "footprint diameter:   {:.3} m at nadir",
+        p.footprint_diameter_m
+    );
     println!(
         "expected run size:    ~{} points, points.las ~{:.1} MB",
         p.pulses,

@@ -64,8 +64,18 @@ fn house(out: &mut Vec<RawPolygon>, x0: f64, x1: f64, y0: f64, y1: f64, h: f64, 
     match roof {
         Roof::GableX(r) => {
             // Long walls (south, north) are rectangles; gable ends pentagons.
-            out.push(wall(&[[x0, y0, 0.0], [x1, y0, 0.0], [x1, y0, h], [x0, y0, h]]));
-            out.push(wall(&[[x1, y1, 0.0], [x0, y1, 0.0], [x0, y1, h], [x1, y1, h]]));
+            out.push(wall(&[
+                [x0, y0, 0.0],
+                [x1, y0, 0.0],
+                [x1, y0, h],
+                [x0, y0, h],
+            ]));
+            out.push(wall(&[
+                [x1, y1, 0.0],
+                [x0, y1, 0.0],
+                [x0, y1, h],
+                [x1, y1, h],
+            ]));
             out.push(wall(&[
                 [x0, y1, 0.0],
                 [x0, y0, 0.0],
@@ -80,12 +90,32 @@ fn house(out: &mut Vec<RawPolygon>, x0: f64, x1: f64, y0: f64, y1: f64, h: f64, 
                 [x1, ym, r],
                 [x1, y0, h],
             ]));
-            out.push(roof_poly(&[[x0, y0, h], [x1, y0, h], [x1, ym, r], [x0, ym, r]]));
-            out.push(roof_poly(&[[x1, y1, h], [x0, y1, h], [x0, ym, r], [x1, ym, r]]));
+            out.push(roof_poly(&[
+                [x0, y0, h],
+                [x1, y0, h],
+                [x1, ym, r],
+                [x0, ym, r],
+            ]));
+            out.push(roof_poly(&[
+                [x1, y1, h],
+                [x0, y1, h],
+                [x0, ym, r],
+                [x1, ym, r],
+            ]));
         }
         Roof::GableY(r) => {
-            out.push(wall(&[[x0, y1, 0.0], [x0, y0, 0.0], [x0, y0, h], [x0, y1, h]]));
-            out.push(wall(&[[x1, y0, 0.0], [x1, y1, 0.0], [x1, y1, h], [x1, y0, h]]));
+            out.push(wall(&[
+                [x0, y1, 0.0],
+                [x0, y0, 0.0],
+                [x0, y0, h],
+                [x0, y1, h],
+            ]));
+            out.push(wall(&[
+                [x1, y0, 0.0],
+                [x1, y1, 0.0],
+                [x1, y1, h],
+                [x1, y0, h],
+            ]));
             out.push(wall(&[
                 [x0, y0, 0.0],
                 [x1, y0, 0.0],
@@ -100,8 +130,18 @@ fn house(out: &mut Vec<RawPolygon>, x0: f64, x1: f64, y0: f64, y1: f64, h: f64, 
                 [xm, y1, r],
                 [x1, y1, h],
             ]));
-            out.push(roof_poly(&[[x0, y0, h], [xm, y0, r], [xm, y1, r], [x0, y1, h]]));
-            out.push(roof_poly(&[[x1, y1, h], [xm, y1, r], [xm, y0, r], [x1, y0, h]]));
+            out.push(roof_poly(&[
+                [x0, y0, h],
+                [xm, y0, r],
+                [xm, y1, r],
+                [x0, y1, h],
+            ]));
+            out.push(roof_poly(&[
+                [x1, y1, h],
+                [xm, y1, r],
+                [xm, y0, r],
+                [x1, y0, h],
+            ]));
         }
         Roof::Hip(r) => {
             let half_depth = 0.5 * (y1 - y0);
@@ -114,8 +154,18 @@ fn house(out: &mut Vec<RawPolygon>, x0: f64, x1: f64, y0: f64, y1: f64, h: f64, 
             ] {
                 out.push(wall(&v));
             }
-            out.push(roof_poly(&[[x0, y0, h], [x1, y0, h], [rb, ym, r], [ra, ym, r]]));
-            out.push(roof_poly(&[[x1, y1, h], [x0, y1, h], [ra, ym, r], [rb, ym, r]]));
+            out.push(roof_poly(&[
+                [x0, y0, h],
+                [x1, y0, h],
+                [rb, ym, r],
+                [ra, ym, r],
+            ]));
+            out.push(roof_poly(&[
+                [x1, y1, h],
+                [x0, y1, h],
+                [ra, ym, r],
+                [rb, ym, r],
+            ]));
             out.push(roof_poly(&[[x0, y1, h], [x0, y0, h], [ra, ym, r]]));
             out.push(roof_poly(&[[x1, y0, h], [x1, y1, h], [rb, ym, r]]));
         }

@@ -238,39 +238,12 @@ mod tests {
     fn matches_independent_matrices() {
         // Compare with matrices written out element by element.
         let (r, p, y) = (0.03f64, -0.02f64, 0.7f64);
-        let rx = DMat3::from_cols_array(&[
-            1.0,
-            0.0,
-            0.0,
-            0.0,
-            p.cos(),
-            p.sin(),
-            0.0,
-            -p.sin(),
-            p.cos(),
-        ]);
-        let ry = DMat3::from_cols_array(&[
-            r.cos(),
-            0.0,
-            -r.sin(),
-            0.0,
-            1.0,
-            0.0,
-            r.sin(),
-            0.0,
-            r.cos(),
-        ]);
-        let rz = DMat3::from_cols_array(&[
-            y.cos(),
-            y.sin(),
-            0.0,
-            -y.sin(),
-            y.cos(),
-            0.0,
-            0.0,
-            0.0,
-            1.0,
-        ]);
+        let rx =
+            DMat3::from_cols_array(&[1.0, 0.0, 0.0, 0.0, p.cos(), p.sin(), 0.0, -p.sin(), p.cos()]);
+        let ry =
+            DMat3::from_cols_array(&[r.cos(), 0.0, -r.sin(), 0.0, 1.0, 0.0, r.sin(), 0.0, r.cos()]);
+        let rz =
+            DMat3::from_cols_array(&[y.cos(), y.sin(), 0.0, -y.sin(), y.cos(), 0.0, 0.0, 0.0, 1.0]);
         let want = rz * rx * ry;
         let got = Attitude {
             roll_rad: r,

@@ -38,10 +38,12 @@
 //! let survey = Survey::from_toml(text, None).unwrap();
 //! let bvh = Bvh::build(survey.scene.clone());
 //! let sim = Simulator::new(&survey, &bvh);
-//! let mut sinks: Vec<Box<dyn lidarsim::output::PointSink>> = vec![Box::new(MemorySink::default())];
-//! let counts = sim.run(1, &mut sinks, &|_| {}).unwrap();
+//! let mut points = MemorySink::default();
+//! let counts = sim.run(1, &mut [&mut points], &|_| {}).unwrap();
 //! assert_eq!(counts.pulses, 16_000);
-//! assert_eq!(counts.points, counts.pulses); // one echo per pulse from a plane
+//! // One echo per pulse from a plane, all of them on it.
+//! assert_eq!(points.points.len() as u64, counts.pulses);
+//! assert!(points.points.iter().all(|p| p.position_m.z.abs() < 0.01));
 //! ```
 
 #![deny(missing_docs)]

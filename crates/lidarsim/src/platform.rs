@@ -171,7 +171,10 @@ mod tests {
 
     #[test]
     fn straight_line_positions_and_headings() {
-        let l = line(DVec3::new(0.0, -500.0, 1000.0), DVec3::new(0.0, 500.0, 1000.0));
+        let l = line(
+            DVec3::new(0.0, -500.0, 1000.0),
+            DVec3::new(0.0, 500.0, 1000.0),
+        );
         assert_eq!(l.duration_s(), 20.0);
         let p = l.pose_at(4.0);
         assert!((p.position_m - DVec3::new(0.0, -300.0, 1000.0)).length() < 1e-12);

@@ -122,7 +122,11 @@ pub fn run_to_dir(
 
     let sim = Simulator::new(survey, &bvh);
     let timer = Timer::start();
-    let counts = match sim.run(options.threads, &mut sinks, options.progress) {
+    let mut refs: Vec<&mut (dyn PointSink + 'static)> =
+        sinks.iter_mut().map(|b| b.as_mut()).collect();
+    let result = sim.run(options.threads, &mut refs, options.progress);
+    drop(refs);
+    let counts = match result {
         Ok(c) => c,
         Err(e) => {
             for s in sinks {

@@ -12,8 +12,8 @@ use crate::geometry::DVec3;
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MirrorProfile {
-    /// Constant angular speed between the turning points (saw-tooth-free
-    /// zig-zag): evenly spaced footprints across the swath.
+    /// Constant angular speed between the turning points (a zig-zag):
+    /// footprints evenly spaced in angle across the swath.
     Triangle,
     /// Sinusoidal motion: dense at the swath edges, sparse at nadir.
     Sine,

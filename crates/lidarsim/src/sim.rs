@@ -212,11 +212,8 @@ impl<'a> Simulator<'a> {
         let mut noise_rng = Stream::new(s.seed, line.index, k, Purpose::ReceiverNoise);
         self.receiver
             .synthesize(&scratch.returns, &mut noise_rng, &mut scratch.waveform);
-        self.detector.detect(
-            &scratch.waveform,
-            &mut scratch.signal,
-            &mut scratch.echoes,
-        );
+        self.detector
+            .detect(&scratch.waveform, &mut scratch.signal, &mut scratch.echoes);
         let n = scratch.echoes.len();
         if n == 0 {
             return 0;
@@ -227,7 +224,10 @@ impl<'a> Simulator<'a> {
         let right_h = DVec3::new(right.x, right.y, 0.0).normalize_or_zero();
         let scan_angle_deg = central.dot(right_h).atan2(-central.z).to_degrees();
         let moving_left = mirror.moving_left_at(t);
-        let edge = moving_left != mirror.moving_left_at(t + 1.0 / prf);
+        // The next pulse's time from its own tick, exactly as it will be
+        // computed for that pulse, so that the two agree on the direction.
+        let t_next = line.start_time_s + (k + 1) as f64 / prf;
+        let edge = moving_left != mirror.moving_left_at(t_next);
         let bin_s = s.receiver.bin_s;
 
         for (i, echo) in scratch.echoes.iter().enumerate() {
@@ -266,7 +266,9 @@ impl<'a> Simulator<'a> {
             out.push(PointRecord {
                 position_m: position,
                 gps_time_s: self.time_offset_s + t,
-                intensity: (s.intensity_gain * echo.amplitude).round().clamp(0.0, 65535.0) as u16,
+                intensity: (s.intensity_gain * echo.amplitude)
+                    .round()
+                    .clamp(0.0, 65535.0) as u16,
                 amplitude: echo.amplitude,
                 echo_width_ns: echo.width_ns,
                 range_m: echo.range_m,
@@ -332,7 +334,7 @@ impl<'a> Simulator<'a> {
     pub fn run(
         &self,
         threads: usize,
-        sinks: &mut [Box<dyn PointSink>],
+        sinks: &mut [&mut (dyn PointSink + 'static)],
         progress: &(dyn Fn(u64) + Sync),
     ) -> io::Result<RunCounts> {
         let pool = rayon::ThreadPoolBuilder::new()

@@ -173,11 +173,7 @@ impl Receiver {
         let nb = (before / config.bin_s).ceil() as usize;
         let na = (after / config.bin_s).ceil() as usize;
         let kernel = (0..=nb + na)
-            .map(|j| {
-                config
-                    .pulse
-                    .value((j as f64 - nb as f64) * config.bin_s)
-            })
+            .map(|j| config.pulse.value((j as f64 - nb as f64) * config.bin_s))
             .collect();
         Self {
             config,

@@ -160,13 +160,14 @@ impl PointSink for LasWriter {
             // Classification flags 0, scanner channel 0, then the scan
             // direction flag (bit 6) and edge of flight line (bit 7).
             self.buf.push(
-                (u8::from(p.scan_direction_positive) << 6)
-                    | (u8::from(p.edge_of_flight_line) << 7),
+                (u8::from(p.scan_direction_positive) << 6) | (u8::from(p.edge_of_flight_line) << 7),
             );
             self.buf.push(p.classification);
             self.buf.push(0); // user data
             // Scan angle in 0.006° increments, −30 000 … +30 000.
-            let sa = (p.scan_angle_deg / 0.006).round().clamp(-30_000.0, 30_000.0) as i16;
+            let sa = (p.scan_angle_deg / 0.006)
+                .round()
+                .clamp(-30_000.0, 30_000.0) as i16;
             self.buf.extend_from_slice(&sa.to_le_bytes());
             self.buf.extend_from_slice(&p.point_source_id.to_le_bytes());
             self.buf.extend_from_slice(&p.gps_time_s.to_le_bytes());

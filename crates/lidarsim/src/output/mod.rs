@@ -105,7 +105,10 @@ impl AtomicFile {
             Err(e) => return Err(e),
         }
         let file = File::create(&partial).map_err(|e| {
-            io::Error::new(e.kind(), format!("cannot create '{}': {e}", partial.display()))
+            io::Error::new(
+                e.kind(),
+                format!("cannot create '{}': {e}", partial.display()),
+            )
         })?;
         Ok(Self {
             writer: Some(BufWriter::with_capacity(1 << 20, file)),

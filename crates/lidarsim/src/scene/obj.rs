@@ -155,14 +155,13 @@ pub fn load_obj(
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, materials) =
-        tobj::load_obj_buf(&mut BufReader::new(&text[..]), &options, |p| {
-            tobj::load_mtl(base.join(p))
-        })
-        .map_err(|e| MeshError::Parse {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?;
+    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(&text[..]), &options, |p| {
+        tobj::load_mtl(base.join(p))
+    })
+    .map_err(|e| MeshError::Parse {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
     let mtl_materials = materials.unwrap_or_default();
 
     for (line, name) in &uses {
@@ -360,11 +359,22 @@ mod tests {
         assert_eq!(b.max, DVec3::new(12.0, 2.0, 0.0));
 
         // A usemtl that nothing defines is an error naming the line.
-        std::fs::write(dir.join("bad.obj"), "v 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl nope\nf 1 2 3\n")
-            .unwrap();
-        let e = load_obj(&dir.join("bad.obj"), &placement, &HashMap::new(), &mut scene)
-            .unwrap_err();
-        assert!(matches!(e, MeshError::UnknownMaterial { line: 4, .. }), "{e}");
+        std::fs::write(
+            dir.join("bad.obj"),
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl nope\nf 1 2 3\n",
+        )
+        .unwrap();
+        let e = load_obj(
+            &dir.join("bad.obj"),
+            &placement,
+            &HashMap::new(),
+            &mut scene,
+        )
+        .unwrap_err();
+        assert!(
+            matches!(e, MeshError::UnknownMaterial { line: 4, .. }),
+            "{e}"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 }

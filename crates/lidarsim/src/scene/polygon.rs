@@ -279,7 +279,11 @@ mod tests {
         .unwrap_err();
         assert!(matches!(e, PolygonError::NotPlanar { .. }));
         assert!(matches!(
-            Polygon::new(vec![v(0.0, 0.0, f64::NAN), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0)]),
+            Polygon::new(vec![
+                v(0.0, 0.0, f64::NAN),
+                v(1.0, 0.0, 0.0),
+                v(0.0, 1.0, 0.0)
+            ]),
             Err(PolygonError::NotFinite(0))
         ));
     }

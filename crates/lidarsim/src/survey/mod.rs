@@ -207,7 +207,10 @@ impl Checker {
     fn count(&mut self, path: KeyPath, value: Option<i64>, default: i64, lo: i64, hi: i64) -> i64 {
         let v = value.unwrap_or(default);
         if v < lo || v > hi {
-            self.err(path, format!("must be a whole number from {lo} to {hi}, got {v}"));
+            self.err(
+                path,
+                format!("must be a whole number from {lo} to {hi}, got {v}"),
+            );
             return default;
         }
         v
@@ -220,7 +223,10 @@ impl Checker {
                 None
             }
             Some(v) if v.len() != 3 => {
-                self.err(path, format!("must be [x, y, z] (3 numbers), got {} numbers", v.len()));
+                self.err(
+                    path,
+                    format!("must be [x, y, z] (3 numbers), got {} numbers", v.len()),
+                );
                 None
             }
             Some(v) if v.iter().any(|x| !x.is_finite()) => {
@@ -345,8 +351,12 @@ impl Survey {
         let s = &raw.scanner;
         let sp = root.key("scanner");
         let prf_hz = c.positive(sp.key("prf_hz"), s.prf_hz, 100_000.0, " Hz");
-        let scan_frequency_hz =
-            c.positive(sp.key("scan_frequency_hz"), s.scan_frequency_hz, 50.0, " Hz");
+        let scan_frequency_hz = c.positive(
+            sp.key("scan_frequency_hz"),
+            s.scan_frequency_hz,
+            50.0,
+            " Hz",
+        );
         let scan_angle_deg = c.number(
             sp.key("scan_angle_deg"),
             s.scan_angle_deg,
@@ -396,7 +406,9 @@ impl Survey {
             Some(other) => {
                 c.err(
                     sp.key("pulse_shape"),
-                    format!("unknown pulse shape '{other}'; expected \"gaussian\" or \"rise-tail\""),
+                    format!(
+                        "unknown pulse shape '{other}'; expected \"gaussian\" or \"rise-tail\""
+                    ),
                 );
                 PulseShape::Gaussian {
                     fwhm_s: pulse_fwhm_ns * 1e-9,
@@ -532,9 +544,9 @@ impl Survey {
             if l.speed_mps.is_none() {
                 c.err(lp.key("speed_mps"), "is required: ground speed in m/s");
             }
-            let altitude = l.altitude_m.map(|a| {
-                c.number(lp.key("altitude_m"), Some(a), 0.0, -1e4, false, 1e5, " m")
-            });
+            let altitude = l
+                .altitude_m
+                .map(|a| c.number(lp.key("altitude_m"), Some(a), 0.0, -1e4, false, 1e5, " m"));
             let (Some(mut start), Some(mut end)) = (start, end) else {
                 continue;
             };
@@ -543,7 +555,10 @@ impl Survey {
                 end.z = a;
             }
             if (end - start).length() < 1e-6 {
-                c.err(lp.key("end_m"), "must differ from start_m: the line has no length");
+                c.err(
+                    lp.key("end_m"),
+                    "must differ from start_m: the line has no length",
+                );
                 continue;
             }
             let index = lines.len() as u32;
@@ -598,14 +613,25 @@ impl Survey {
                 " s",
             )
         });
-        let las_scale_m = c.number(op.key("las_scale_m"), o.las_scale_m, 0.001, 0.0, true, 1.0, " m");
+        let las_scale_m = c.number(
+            op.key("las_scale_m"),
+            o.las_scale_m,
+            0.001,
+            0.0,
+            true,
+            1.0,
+            " m",
+        );
 
         // [materials]
         let mut materials: HashMap<String, Material> = HashMap::new();
         for (name, m) in &raw.materials {
             let mp = root.key("materials").key(name);
             if m.reflectance.is_none() {
-                c.err(mp.key("reflectance"), "is required: reflectance from 0 to 1");
+                c.err(
+                    mp.key("reflectance"),
+                    "is required: reflectance from 0 to 1",
+                );
             }
             let reflectance = c.number(
                 mp.key("reflectance"),
@@ -658,7 +684,10 @@ impl Survey {
             let class = c.class(pp.key("class"), &poly.class);
             let material = match &poly.material {
                 None => {
-                    c.err(pp.key("material"), "is required: the name of a [materials.NAME] table");
+                    c.err(
+                        pp.key("material"),
+                        "is required: the name of a [materials.NAME] table",
+                    );
                     None
                 }
                 Some(m) => match materials.get(m) {
@@ -674,7 +703,10 @@ impl Survey {
             };
             let vertices = match &poly.vertices_m {
                 None => {
-                    c.err(pp.key("vertices_m"), "is required: a list of [x, y, z] points");
+                    c.err(
+                        pp.key("vertices_m"),
+                        "is required: a list of [x, y, z] points",
+                    );
                     None
                 }
                 Some(vs) => {
@@ -873,7 +905,10 @@ vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
         assert_eq!(d[0].line, 5);
         assert!(d[0].message.contains("greater than 0"));
         let text = d[0].to_string();
-        assert!(text.starts_with("s.toml:5:13: key `flight_line[0].speed_mps`"), "{text}");
+        assert!(
+            text.starts_with("s.toml:5:13: key `flight_line[0].speed_mps`"),
+            "{text}"
+        );
 
         let unknown = format!("[scanner]\nprff_hz = 3\n{MINIMAL}");
         let d = diagnostics(&unknown);
@@ -891,7 +926,10 @@ vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
         );
         let d = diagnostics(&several);
         let keys: Vec<&str> = d.iter().map(|d| d.key.as_str()).collect();
-        assert_eq!(keys, ["scanner.prf_hz", "scanner.subrays", "polygon[0].material"]);
+        assert_eq!(
+            keys,
+            ["scanner.prf_hz", "scanner.subrays", "polygon[0].material"]
+        );
         assert!(d[2].message.contains("defined: grass"));
     }
 
