@@ -1,0 +1,278 @@
+//! The command line: bad input gets a clear message and a non-zero exit,
+//! without a panic and without output that looks complete; good input runs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_lidarsim"))
+}
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("lidarsim-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const GOOD: &str = r#"seed = 3
+
+[scanner]
+prf_hz = 20000
+scan_frequency_hz = 40
+scan_angle_deg = 15
+
+[[flight_line]]
+start_m = [0.0, -10.0, 300.0]
+end_m = [0.0, 10.0, 300.0]
+speed_mps = 50.0
+
+[output]
+formats = ["las", "xyz"]
+
+[materials.grass]
+reflectance = 0.4
+
+[[polygon]]
+material = "grass"
+class = "ground"
+vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
+"#;
+
+fn run_survey(dir: &Path, text: &str) -> (Output, PathBuf) {
+    let survey = dir.join("survey.toml");
+    std::fs::write(&survey, text).unwrap();
+    let out = dir.join("out");
+    let o = bin()
+        .arg("run")
+        .arg(&survey)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    (o, out)
+}
+
+/// Runs a broken survey and checks the failure is clean and informative.
+fn assert_rejected(name: &str, text: &str, line: usize, key: &str, words: &str) {
+    let dir = temp(name);
+    let (o, out) = run_survey(&dir, text);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{name}: {stderr}");
+    assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+    let place = format!("survey.toml:{line}:");
+    assert!(
+        stderr.contains(&place),
+        "{name}: wanted {place} in {stderr}"
+    );
+    assert!(stderr.contains(key), "{name}: wanted key {key} in {stderr}");
+    assert!(
+        stderr.contains(words),
+        "{name}: wanted '{words}' in {stderr}"
+    );
+    for f in ["points.las", "points.xyz", "summary.json", "trajectory.csv"] {
+        assert!(!out.join(f).exists(), "{name}: {f} was written");
+    }
+    // `check` rejects it the same way.
+    let c = bin()
+        .arg("check")
+        .arg(dir.join("survey.toml"))
+        .output()
+        .unwrap();
+    assert_eq!(c.status.code(), Some(2));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn unknown_key() {
+    let t = GOOD.replace("scan_angle_deg = 15", "scan_angle_deg = 15\nscan_angel = 3");
+    assert_rejected("unknown", &t, 7, "scanner.scan_angel", "unknown field");
+}
+
+#[test]
+fn wrong_type() {
+    let t = GOOD.replace("prf_hz = 20000", "prf_hz = \"fast\"");
+    assert_rejected("type", &t, 4, "scanner.prf_hz", "invalid type");
+}
+
+#[test]
+fn negative_and_zero_prf_and_speed() {
+    let t = GOOD.replace("prf_hz = 20000", "prf_hz = -20000");
+    assert_rejected("negprf", &t, 4, "scanner.prf_hz", "greater than 0");
+    let t = GOOD.replace("prf_hz = 20000", "prf_hz = 0");
+    assert_rejected("zeroprf", &t, 4, "scanner.prf_hz", "greater than 0");
+    let t = GOOD.replace("speed_mps = 50.0", "speed_mps = 0.0");
+    assert_rejected(
+        "zerospeed",
+        &t,
+        11,
+        "flight_line[0].speed_mps",
+        "greater than 0",
+    );
+    let t = GOOD.replace("speed_mps = 50.0", "speed_mps = -3");
+    assert_rejected(
+        "negspeed",
+        &t,
+        11,
+        "flight_line[0].speed_mps",
+        "greater than 0",
+    );
+}
+
+#[test]
+fn empty_and_non_planar_polygons() {
+    let t = GOOD.replace(
+        "vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]",
+        "vertices_m = []",
+    );
+    assert_rejected(
+        "empty",
+        &t,
+        22,
+        "polygon[0].vertices_m",
+        "at least 3 vertices",
+    );
+    let t = GOOD.replace("[300, 300, 0]", "[300, 300, 2]");
+    assert_rejected("warped", &t, 22, "polygon[0].vertices_m", "not planar");
+}
+
+#[test]
+fn missing_material_and_mesh() {
+    let t = GOOD.replace("material = \"grass\"", "material = \"lawn\"");
+    assert_rejected(
+        "nomat",
+        &t,
+        20,
+        "polygon[0].material",
+        "unknown material 'lawn'",
+    );
+    let t = format!("{GOOD}\n[[mesh]]\nfile = \"house.obj\"\nclass = \"roof\"\n");
+    assert_rejected("noobj", &t, 25, "mesh[0].file", "house.obj");
+}
+
+#[test]
+fn missing_material_inside_an_obj_file() {
+    let dir = temp("objmat");
+    std::fs::write(
+        dir.join("house.obj"),
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl brick\nf 1 2 3\n",
+    )
+    .unwrap();
+    let t = format!("{GOOD}\n[[mesh]]\nfile = \"house.obj\"\n");
+    let (o, out) = run_survey(&dir, &t);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr.contains("mesh[0].file") && stderr.contains("'brick'"),
+        "{stderr}"
+    );
+    assert!(stderr.contains("line 4"), "{stderr}");
+    assert!(!out.join("points.las").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn several_problems_are_reported_together() {
+    let t = GOOD
+        .replace("prf_hz = 20000", "prf_hz = -1")
+        .replace("speed_mps = 50.0", "speed_mps = 0");
+    let dir = temp("several");
+    let (o, _) = run_survey(&dir, &t);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("scanner.prf_hz") && stderr.contains("flight_line[0].speed_mps"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn missing_file_and_bad_threads() {
+    let o = bin().args(["run", "/nonexistent/s.toml"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("/nonexistent/s.toml") && !stderr.contains("panicked"));
+    let dir = temp("threads");
+    std::fs::write(dir.join("s.toml"), GOOD).unwrap();
+    let o = bin()
+        .arg("run")
+        .arg(dir.join("s.toml"))
+        .args(["--threads", "0", "-o"])
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn good_survey_runs_and_check_predicts_it() {
+    let dir = temp("good");
+    let (o, out) = run_survey(&dir, GOOD);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["points.las", "points.xyz", "summary.json", "trajectory.csv"] {
+        assert!(out.join(f).exists(), "{f} missing");
+        assert!(!out.join(format!("{f}.partial")).exists());
+    }
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    for key in [
+        "pulses",
+        "points",
+        "pulses_with_echo",
+        "subrays_per_pulse",
+        "threads",
+        "seed",
+        "wall_time_s",
+        "pulses_per_second",
+        "swath_width_m",
+        "point_density_per_m2",
+    ] {
+        assert!(summary.get(key).is_some(), "summary lacks {key}");
+    }
+    assert_eq!(summary["pulses"], 8000);
+    assert_eq!(summary["seed"], 3);
+    let swath = 2.0 * 300.0 * 15f64.to_radians().tan();
+    assert!((summary["swath_width_m"].as_f64().unwrap() - swath).abs() < 1e-6);
+    // Trajectory: one row per millisecond of the 0.4 s line, plus header.
+    let traj = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    assert_eq!(traj.lines().count(), 1 + 401);
+    assert!(traj.starts_with("gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg"));
+
+    let c = bin()
+        .arg("check")
+        .arg(dir.join("survey.toml"))
+        .output()
+        .unwrap();
+    assert!(c.status.success());
+    let text = String::from_utf8_lossy(&c.stdout);
+    assert!(text.contains("pulses:               8000"), "{text}");
+    assert!(text.contains(&format!("{swath:.1} m")), "{text}");
+    assert!(text.contains("footprint diameter:   0.090 m"), "{text}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn seed_changes_noise_but_not_geometry() {
+    let noisy = GOOD.replace(
+        "[output]",
+        "[receiver]\nnoise = 0.01\nspeckle = true\n\n[output]",
+    );
+    let dir = temp("seed");
+    std::fs::write(dir.join("s.toml"), &noisy).unwrap();
+    let run = |seed: &str, sub: &str| {
+        let out = dir.join(sub);
+        let o = bin()
+            .arg("run")
+            .arg(dir.join("s.toml"))
+            .args(["--seed", seed, "-o"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success());
+        std::fs::read_to_string(out.join("points.xyz")).unwrap()
+    };
+    let a = run("1", "a");
+    let b = run("1", "b");
+    let c = run("2", "c");
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -1,0 +1,195 @@
+//! The LAS file read back by an independent reader (the `las` crate) and by
+//! hand against the LAS 1.4 R15 byte layout, checked against the geometry
+//! of the survey, and against the text output written by the other sink.
+
+use std::path::PathBuf;
+
+use lidarsim::Survey;
+use lidarsim::run::{RunOptions, run_to_dir};
+
+fn out_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("lidarsim-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+const H: f64 = 500.0;
+
+fn flat_survey(extra: &str) -> Survey {
+    let text = format!(
+        r#"
+seed = 5
+[scanner]
+prf_hz = 50000
+scan_frequency_hz = 40
+scan_angle_deg = 18
+[output]
+formats = ["las", "xyz"]
+{extra}
+[[flight_line]]
+start_m = [1000.0, 2000.0, {H}]
+end_m = [1000.0, 2060.0, {H}]
+speed_mps = 60.0
+[materials.grass]
+reflectance = 0.3
+[[polygon]]
+material = "grass"
+class = "ground"
+vertices_m = [[0, 1000, 0], [2000, 1000, 0], [2000, 3000, 0], [0, 3000, 0]]
+"#
+    );
+    Survey::from_toml(&text, None).unwrap()
+}
+
+#[test]
+fn las_header_and_points_read_back_with_an_independent_reader() {
+    let survey = flat_survey("");
+    let dir = out_dir("las");
+    let summary = run_to_dir(
+        &survey,
+        &dir,
+        &RunOptions {
+            threads: 2,
+            progress: &|_| {},
+        },
+    )
+    .unwrap();
+
+    let mut reader = las::Reader::from_path(dir.join("points.las")).unwrap();
+    let header = reader.header().clone();
+    assert_eq!(header.version(), las::Version::new(1, 4));
+    assert_eq!(header.point_format().to_u8().unwrap(), 6);
+    assert_eq!(header.number_of_points(), summary.points);
+    assert_eq!(header.number_of_points_by_return(1), Some(summary.points));
+    assert_eq!(header.file_source_id(), 1);
+    assert!(
+        header.has_wkt_crs(),
+        "WKT bit must be set for point format 6"
+    );
+    assert_eq!(header.gps_time_type(), las::GpsTimeType::Week);
+    assert!(header.generating_software().starts_with("lidarsim"));
+
+    let points: Vec<las::Point> = reader
+        .read_all()
+        .unwrap()
+        .points()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(points.len() as u64, summary.points);
+    assert_eq!(summary.points, summary.pulses); // one echo per pulse
+
+    // Header bounds are the extremes of the points.
+    let b = header.bounds();
+    let min_x = points.iter().map(|p| p.x).fold(f64::MAX, f64::min);
+    let max_x = points.iter().map(|p| p.x).fold(f64::MIN, f64::max);
+    let max_y = points.iter().map(|p| p.y).fold(f64::MIN, f64::max);
+    assert!((b.min.x - min_x).abs() < 1e-9 && (b.max.x - max_x).abs() < 1e-9);
+    assert!((b.max.y - max_y).abs() < 1e-9);
+
+    let half = 18f64.to_radians();
+    let mut last_time = f64::MIN;
+    for p in &points {
+        // On the plane, within the swath, classified as ground.
+        assert!(p.z.abs() < 0.01, "z = {}", p.z);
+        assert!((p.x - 1000.0).abs() <= H * half.tan() + 0.01);
+        assert_eq!(p.classification, las::point::Classification::Ground);
+        assert_eq!((p.return_number, p.number_of_returns), (1, 1));
+        assert_eq!(p.point_source_id, 1);
+        // Scan angle: LAS counts counter-clockwise seen from behind as
+        // positive, i.e. towards the right of the flight direction (east for
+        // a northbound line): tan(angle) = Δx / H, quantised to 0.006°.
+        let want = ((p.x - 1000.0) / H).atan().to_degrees();
+        assert!(
+            (f64::from(p.scan_angle) - want).abs() < 0.0031,
+            "{} vs {want}",
+            p.scan_angle
+        );
+        let t = p.gps_time.unwrap();
+        assert!(t >= last_time);
+        last_time = t;
+    }
+    // The last pulse leaves just before the end of the 1 s line.
+    assert!(last_time < 1.0 && last_time > 0.999);
+    // Both scan directions and some edge points are present.
+    let l2r = points
+        .iter()
+        .filter(|p| p.scan_direction == las::point::ScanDirection::LeftToRight)
+        .count();
+    assert!(l2r > points.len() / 3 && l2r < 2 * points.len() / 3);
+    let edges = points.iter().filter(|p| p.is_edge_of_flight_line).count();
+    // Two scan lines per mirror cycle, 40 cycles in 1 s.
+    assert!((79..=81).contains(&edges), "{edges}");
+    // Moving left to right means the beam's x increases along the line.
+    for w in points.windows(2) {
+        if w[0].scan_direction == las::point::ScanDirection::LeftToRight
+            && !w[0].is_edge_of_flight_line
+        {
+            assert!(w[1].x > w[0].x);
+        }
+    }
+
+    // The text output holds the same points.
+    let text = std::fs::read_to_string(dir.join("points.xyz")).unwrap();
+    let mut lines = text.lines();
+    assert!(lines.next().unwrap().starts_with("x y z intensity"));
+    let mut n = 0;
+    for (line, p) in lines.zip(&points) {
+        let cols: Vec<f64> = line
+            .split_whitespace()
+            .map(|c| c.parse().unwrap())
+            .collect();
+        assert!((cols[0] - p.x).abs() < 0.0006 && (cols[1] - p.y).abs() < 0.0006);
+        assert!((cols[2] - p.z).abs() < 0.0006);
+        assert_eq!(cols[3] as u16, p.intensity);
+        n += 1;
+    }
+    assert_eq!(n, points.len());
+
+    // Intensity follows Eq. 2 with the documented gain: ρ (Rn/R)² cos α
+    // times 10 000 (the beam is at most 18° off nadir over level ground).
+    for p in points.iter().step_by(97) {
+        let angle = f64::from(p.scan_angle).to_radians();
+        let range = H / angle.cos();
+        let want = 10_000.0 * 0.3 * (1000.0 / range).powi(2) * angle.cos();
+        assert!((f64::from(p.intensity) - want).abs() < 0.01 * want + 1.0);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn raw_header_bytes_follow_the_specification() {
+    let survey = flat_survey("gps_start_time_s = 400000000.0");
+    let dir = out_dir("raw");
+    let summary = run_to_dir(
+        &survey,
+        &dir,
+        &RunOptions {
+            threads: 1,
+            progress: &|_| {},
+        },
+    )
+    .unwrap();
+    let bytes = std::fs::read(dir.join("points.las")).unwrap();
+    let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
+    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
+    let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap());
+    let f64_at = |o: usize| f64::from_le_bytes(bytes[o..o + 8].try_into().unwrap());
+    // LAS 1.4 R15 Table 3 offsets.
+    assert_eq!(&bytes[0..4], b"LASF");
+    assert_eq!(u16_at(6), 0b1_0001); // adjusted standard GPS time + WKT
+    assert_eq!((bytes[24], bytes[25]), (1, 4));
+    assert_eq!(u16_at(94), 375); // header size
+    assert_eq!(u32_at(96), 375); // offset to point data
+    assert_eq!(u32_at(100), 0); // VLRs
+    assert_eq!(bytes[104], 6); // point format
+    assert_eq!(u16_at(105), 30); // record length
+    assert_eq!(u32_at(107), 0); // legacy count is zero for format 6
+    assert_eq!(f64_at(131), 0.001); // x scale
+    assert_eq!(u64_at(247), summary.points); // number of point records
+    assert_eq!(u64_at(255), summary.points); // first returns
+    assert_eq!(bytes.len() as u64, 375 + 30 * summary.points);
+    // First point record: GPS time at offset 22 within the 30 bytes.
+    let t0 = f64_at(375 + 22);
+    assert_eq!(t0, 400_000_000.0);
+    std::fs::remove_dir_all(&dir).ok();
+}
