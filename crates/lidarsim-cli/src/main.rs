@@ -103,14 +103,14 @@ fn main() -> ExitCode {
             seed,
         } => match Survey::load(&survey) {
             Ok(s) => simulate(s, &output, threads, seed),
-            Err(e) => fail(2, &e.to_string()),
+            Err(e) => fail_survey(&e),
         },
         Command::Check { survey } => match Survey::load(&survey) {
             Ok(s) => {
                 check(&s);
                 ExitCode::SUCCESS
             }
-            Err(e) => fail(2, &e.to_string()),
+            Err(e) => fail_survey(&e),
         },
     }
 }
@@ -118,6 +118,14 @@ fn main() -> ExitCode {
 fn fail(code: u8, message: &str) -> ExitCode {
     eprintln!("error: {message}");
     ExitCode::from(code)
+}
+
+/// Reports every problem of a survey file, exit status 2.
+fn fail_survey(e: &lidarsim::survey::SurveyError) -> ExitCode {
+    for d in &e.diagnostics {
+        eprintln!("error: {d}");
+    }
+    ExitCode::from(2)
 }
 
 fn simulate(

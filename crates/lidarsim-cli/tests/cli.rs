@@ -86,7 +86,13 @@ fn assert_rejected(name: &str, text: &str, line: usize, key: &str, words: &str) 
 #[test]
 fn unknown_key() {
     let t = GOOD.replace("scan_angle_deg = 15", "scan_angle_deg = 15\nscan_angel = 3");
-    assert_rejected("unknown", &t, 7, "scanner.scan_angel", "unknown field");
+    assert_rejected(
+        "unknown",
+        &t,
+        7,
+        "key `scanner.scan_angel`:",
+        "unknown field",
+    );
 }
 
 #[test]

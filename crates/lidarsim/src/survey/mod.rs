@@ -299,7 +299,11 @@ impl Survey {
                 .strip_prefix("unknown field `")
                 .and_then(|rest| rest.split('`').next())
             {
-                let candidate = key.key(name);
+                let candidate = if key.0.last() == Some(&Seg::Key(name.to_string())) {
+                    key.clone()
+                } else {
+                    key.key(name)
+                };
                 if let Some(s) = locator.span_of(&candidate) {
                     span = s;
                     key = candidate;

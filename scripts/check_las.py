@@ -1,0 +1,121 @@
+#!/usr/bin/env python3
+"""Independent check of a lidarsim output directory with laspy.
+
+Reads DIR/points.las with laspy (not our code) and checks it against the
+LAS 1.4 R15 specification, against DIR/summary.json, against the text
+output DIR/points.xyz and against the geometry of the built-in demo scene
+(ground at z = 0, roofs above it). Exits non-zero with a message on the
+first failure; prints the figures it checked and a plain
+"N passed, 0 failed" line at the end.
+"""
+
+import itertools
+import json
+import sys
+from pathlib import Path
+
+import laspy
+import numpy as np
+
+checks = 0
+
+
+def check(cond, what):
+    global checks
+    if not cond:
+        print(f"FAILED: {what}")
+        print(f"{checks} passed, 1 failed")
+        sys.exit(1)
+    checks += 1
+
+
+def main(out):
+    out = Path(out)
+    summary = json.loads((out / "summary.json").read_text())
+    las = laspy.read(out / "points.las")
+    h = las.header
+
+    # Header (LAS 1.4 R15, Table 3).
+    check(str(h.version) == "1.4", f"version 1.4, got {h.version}")
+    check(h.point_format.id == 6, f"point format 6, got {h.point_format.id}")
+    check(h.point_count == summary["points"] == len(las.points),
+          f"point count {h.point_count} vs summary {summary['points']}")
+    check(int(h.global_encoding.value) & 0x10, "WKT bit set for point format 6")
+    check(np.allclose(h.scales, 0.001), f"scales {h.scales}")
+
+    rn = np.asarray(las.return_number)
+    nr = np.asarray(las.number_of_returns)
+    by_return = [int(np.sum(rn == k)) for k in range(1, 16)]
+    check(list(h.number_of_points_by_return[:15]) == by_return,
+          f"points by return {list(h.number_of_points_by_return)} vs {by_return}")
+    check(by_return[: len(summary["points_by_return"])] == summary["points_by_return"],
+          "points by return match summary.json")
+    check(np.all((rn >= 1) & (rn <= nr) & (nr <= 5)), "1 <= return <= returns <= 5")
+
+    x, y, z = np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)
+    check(np.allclose(h.mins, [x.min(), y.min(), z.min()], atol=1e-9), "header minima")
+    check(np.allclose(h.maxs, [x.max(), y.max(), z.max()], atol=1e-9), "header maxima")
+
+    # Classes: ground 2, building 6, noise 7, road 11 — nothing else in the demo.
+    cls = np.asarray(las.classification)
+    check(set(np.unique(cls)) <= {2, 6, 7, 11}, f"classes {sorted(set(np.unique(cls)))}")
+    ground = (cls == 2) | (cls == 11)
+    # Ground at z = 0: all but a few echoes within 2 cm; the rest are mixed
+    # echoes where a footprint straddles a wall base or the scene's edge.
+    dz = np.abs(z[ground])
+    check(np.mean(dz < 0.02) > 0.999, f"ground within 2 cm of z=0: {np.mean(dz < 0.02)}")
+    check(dz.max() < 0.25, f"ground within 25 cm of z=0: {dz.max()}")
+    # Building points: walls reach down to the ground, roofs are 5-12 m up.
+    zb = z[cls == 6]
+    check(np.all(zb > -0.25) and np.all(zb < 12.1), f"building points 0..12 m: {zb.min()}..{zb.max()}")
+    check(np.mean(zb > 4.5) > 0.9, f"building points mostly on roofs: {np.mean(zb > 4.5)}")
+    # Roofs cover 3 468 m² of the 90 000 m² block (3.9 %), walls add some.
+    check(0.035 < np.mean(cls == 6) < 0.06, f"building share {np.mean(cls == 6):.4f}")
+
+    # Scan angle (0.006 degree units): demo scans +-20 degrees, sway <= 0.6.
+    sa = np.asarray(las.scan_angle) * 0.006
+    check(np.all(np.abs(sa) <= 20.7), f"scan angles within +-20.7: {np.abs(sa).max()}")
+    # Both lines reach the block's far side at +20 degrees (to their right);
+    # to their left the block ends 110 m out, atan(110/400) = 15.4 degrees.
+    check(sa.max() > 19.5 and -16 < sa.min() < -14.5, f"scan angles {sa.min()}..{sa.max()}")
+
+    # Flight lines, GPS time order, flags.
+    src = np.asarray(las.point_source_id)
+    check(set(np.unique(src)) == {1, 2}, f"point source ids {set(np.unique(src))}")
+    t = np.asarray(las.gps_time)
+    for s in (1, 2):
+        ts = t[src == s]
+        check(np.all(np.diff(ts) >= 0), f"GPS time non-decreasing in line {s}")
+    edges = int(np.sum(np.asarray(las.edge_of_flight_line)))
+    check(edges > 0, "edge-of-flight-line flags present")
+    sd = np.asarray(las.scan_direction_flag)
+    check(0.4 < sd.mean() < 0.6, f"both scan directions: {sd.mean()}")
+    inten = np.asarray(las.intensity)
+    check(inten.min() >= 0 and np.median(inten) > 1000, "intensities recorded")
+
+    # The text output holds the same points (first 100 000).
+    with open(out / "points.xyz") as f:
+        head = f.readline().split()
+        check(head[:4] == ["x", "y", "z", "intensity"], f"xyz header {head[:4]}")
+        rows = np.loadtxt(itertools.islice(f, 100_000))
+    n = len(rows)
+    check(np.allclose(rows[:, 0], x[:n], atol=6e-4) and np.allclose(rows[:, 1], y[:n], atol=6e-4)
+          and np.allclose(rows[:, 2], z[:n], atol=6e-4), "xyz coordinates match LAS")
+    check(np.array_equal(rows[:, 3].astype(int), inten[:n]), "xyz intensities match LAS")
+
+    # The planned density: points per m2 over the central overlap of the two
+    # lines, first returns, against twice the planned single-line density.
+    first = rn == 1
+    box = first & (np.abs(x) < 20) & (np.abs(y) < 100)
+    measured = np.sum(box) / (40 * 200)
+    planned = 2 * summary["point_density_per_m2"]
+    print(f"central density {measured:.2f} /m2 (planned {planned:.2f} from two lines)")
+    check(abs(measured / planned - 1) < 0.25, "density near the plan")
+
+    print(f"points {len(las.points)}, first/second/third returns {by_return[:3]}, "
+          f"classes {dict(zip(*np.unique(cls, return_counts=True)))}")
+    print(f"{checks} passed, 0 failed")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1] if len(sys.argv) > 1 else "demo-out")

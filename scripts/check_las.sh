@@ -1,0 +1,18 @@
+#!/usr/bin/env bash
+# Runs the built-in demo and validates its LAS file with laspy (an
+# independent reader), installing laspy and lazrs into target/pyenv.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+venv=target/pyenv
+if [ ! -x "$venv/bin/python" ]; then
+  python3 -m venv "$venv"
+fi
+if ! "$venv/bin/python" -c "import laspy, lazrs, numpy" 2>/dev/null; then
+  "$venv/bin/pip" install --quiet --disable-pip-version-check "laspy>=2.5" "lazrs>=0.6" numpy
+fi
+
+out=target/demo-check
+rm -rf "$out"
+cargo run --release --quiet -- demo -o "$out"
+"$venv/bin/python" scripts/check_las.py "$out"
