@@ -1,1 +1,120 @@
-fn main() {}
+//! Throughput benchmark: pulses per second on the demo scene and on a flat
+//! plane, for 1 and 2 worker threads.
+//!
+//! Run with `cargo bench -p lidarsim --bench throughput`. Each case runs
+//! once to warm up, then `REPEATS` times; the median is reported, with the
+//! spread (min–max), as plain `key value` lines a script can read. Points go
+//! to a sink that only counts them, so the figures measure simulation, not
+//! disk; one extra case writes the demo's LAS file to measure output cost.
+
+use std::io;
+use std::time::Instant;
+
+use lidarsim::Survey;
+use lidarsim::accel::Bvh;
+use lidarsim::output::{PointRecord, PointSink};
+use lidarsim::run::{RunOptions, run_to_dir};
+use lidarsim::sim::Simulator;
+
+const REPEATS: usize = 5;
+
+#[derive(Default)]
+struct Count(u64);
+
+impl PointSink for Count {
+    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+        self.0 += points.len() as u64;
+        Ok(())
+    }
+    fn finish(self: Box<Self>) -> io::Result<()> {
+        Ok(())
+    }
+    fn discard(self: Box<Self>) {}
+}
+
+fn flat_plane() -> Survey {
+    // The demo's sensor over a 400 m × 400 m level plane, one 300 m line.
+    let text = r#"
+seed = 1
+[scanner]
+prf_hz = 100000
+scan_frequency_hz = 50
+scan_angle_deg = 20
+divergence_mrad = 0.3
+subrays = 19
+pulse_fwhm_ns = 4.0
+[[flight_line]]
+start_m = [-150.0, 0.0, 500.0]
+end_m = [150.0, 0.0, 500.0]
+speed_mps = 60.0
+[materials.ground]
+reflectance = 0.2
+[[polygon]]
+material = "ground"
+class = "ground"
+vertices_m = [[-200, -200, 0], [200, -200, 0], [200, 200, 0], [-200, 200, 0]]
+"#;
+    Survey::from_toml(text, None).expect("flat survey")
+}
+
+fn demo() -> Survey {
+    Survey::from_raw(lidarsim::demo::demo_survey(), None).expect("demo survey")
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn bench(name: &str, survey: &Survey, threads: usize) {
+    let bvh = Bvh::build(survey.scene.clone());
+    let sim = Simulator::new(survey, &bvh);
+    let run = || {
+        let mut sink = Count::default();
+        let t = Instant::now();
+        let counts = sim.run(threads, &mut [&mut sink], &|_| {}).expect("run");
+        (counts, t.elapsed().as_secs_f64())
+    };
+    let (counts, _) = run(); // warm-up
+    let rates: Vec<f64> = (0..REPEATS)
+        .map(|_| counts.pulses as f64 / run().1)
+        .collect();
+    let lo = rates.iter().cloned().fold(f64::MAX, f64::min);
+    let hi = rates.iter().cloned().fold(f64::MIN, f64::max);
+    let m = median(rates);
+    let rays = m * survey.scanner.subrays as f64;
+    let points = m * counts.points as f64 / counts.pulses as f64;
+    println!(
+        "{name} threads={threads} pulses_per_s={m:.0} (min {lo:.0}, max {hi:.0}) \
+         rays_per_s={rays:.0} points_per_s={points:.0} pulses={}",
+        counts.pulses
+    );
+}
+
+fn main() {
+    // `cargo bench` passes `--bench`; ignore arguments.
+    let flat = flat_plane();
+    let demo = demo();
+    for threads in [1, 2] {
+        bench("flat", &flat, threads);
+        bench("demo", &demo, threads);
+    }
+    // Whole run with LAS + XYZ output, 2 threads.
+    let dir = std::env::temp_dir().join(format!("lidarsim-bench-{}", std::process::id()));
+    let t = Instant::now();
+    let s = run_to_dir(
+        &demo,
+        &dir,
+        &RunOptions {
+            threads: 2,
+            progress: &|_| {},
+        },
+    )
+    .expect("demo run");
+    println!(
+        "demo_with_output threads=2 pulses_per_s={:.0} seconds={:.2}",
+        s.pulses as f64 / t.elapsed().as_secs_f64(),
+        t.elapsed().as_secs_f64()
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
