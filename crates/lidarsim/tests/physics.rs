@@ -132,12 +132,11 @@ fn scan_lines_are_spaced_v_over_two_f_along_track() {
         if best.is_none_or(|(bd, _)| d < bd) {
             best = Some((d, p.position_m.y));
         }
-        if p.edge_of_flight_line {
-            if let Some((d, y)) = best.take()
-                && d < 1.0
-            {
-                nadir_y.push(y);
-            }
+        if p.edge_of_flight_line
+            && let Some((d, y)) = best.take()
+            && d < 1.0
+        {
+            nadir_y.push(y);
         }
     }
     assert!(nadir_y.len() > 150, "{}", nadir_y.len());

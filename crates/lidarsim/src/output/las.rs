@@ -148,10 +148,10 @@ impl PointSink for LasWriter {
                 self.quantize(p.position_m.y, 1)?,
                 self.quantize(p.position_m.z, 2)?,
             ];
-            for a in 0..3 {
-                self.min[a] = self.min[a].min(xyz[a]);
-                self.max[a] = self.max[a].max(xyz[a]);
-                self.buf.extend_from_slice(&xyz[a].to_le_bytes());
+            for (a, q) in xyz.iter().enumerate() {
+                self.min[a] = self.min[a].min(*q);
+                self.max[a] = self.max[a].max(*q);
+                self.buf.extend_from_slice(&q.to_le_bytes());
             }
             self.buf.extend_from_slice(&p.intensity.to_le_bytes());
             let rn = p.return_number.clamp(1, 15);

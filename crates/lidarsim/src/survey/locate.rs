@@ -130,10 +130,10 @@ impl<'a> Locator<'a> {
                 DeValue::Table(t) => {
                     for (k, v) in t.iter() {
                         let p = path.key(k.get_ref());
-                        if contains(&k.span(), span) || contains(&v.span(), span) {
-                            if p.0.len() > best.0 {
-                                *best = (p.0.len(), p.clone());
-                            }
+                        if (contains(&k.span(), span) || contains(&v.span(), span))
+                            && p.0.len() > best.0
+                        {
+                            *best = (p.0.len(), p.clone());
                         }
                         walk(v.get_ref(), span, &p, best);
                     }
