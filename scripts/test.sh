@@ -15,4 +15,6 @@ echo "== cargo test"
 cargo test --quiet
 echo "== demo + independent LAS check (laspy)"
 scripts/check_las.sh
+echo "== memory stays flat in flight length"
+python3 scripts/check_memory.py target/release/lidarsim
 echo "== all checks passed"

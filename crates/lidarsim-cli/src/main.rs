@@ -4,7 +4,7 @@
 //! checks the survey, runs it with a progress bar and reports errors with a
 //! non-zero exit status (2 for a bad survey, 1 for a failed run).
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -115,6 +115,13 @@ fn main() -> ExitCode {
     }
 }
 
+/// Prints a line to standard output, ignoring a closed pipe (`| head`).
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 fn fail(code: u8, message: &str) -> ExitCode {
     eprintln!("error: {message}");
     ExitCode::from(code)
@@ -174,46 +181,52 @@ fn simulate(
 }
 
 fn report(s: &Summary, output: &Path) {
-    println!(
+    say!(
         "{} pulses → {} points ({} pulses with an echo) in {:.2} s: {:.0} pulses/s on {} thread(s)",
-        s.pulses, s.points, s.pulses_with_echo, s.wall_time_s, s.pulses_per_second, s.threads
+        s.pulses,
+        s.points,
+        s.pulses_with_echo,
+        s.wall_time_s,
+        s.pulses_per_second,
+        s.threads
     );
-    println!(
+    say!(
         "expected swath {:.1} m, density {:.2} points/m² per line",
-        s.swath_width_m, s.point_density_per_m2
+        s.swath_width_m,
+        s.point_density_per_m2
     );
     for f in &s.files {
-        println!("wrote {}", output.join(f).display());
+        say!("wrote {}", output.join(f).display());
     }
 }
 
 fn check(survey: &Survey) {
     let bvh = Bvh::build(survey.scene.clone());
     let p = plan(survey, &bvh);
-    println!(
+    say!(
         "survey OK: {} flight line(s), {} scene primitives, seed {}",
         survey.lines.len(),
         survey.scene.primitives.len(),
         survey.seed
     );
-    println!("pulses:               {}", p.pulses);
-    println!("flight time:          {:.1} s", p.flight_time_s);
-    println!("swath width:          {:.1} m", p.swath_width_m);
-    println!(
+    say!("pulses:               {}", p.pulses);
+    say!("flight time:          {:.1} s", p.flight_time_s);
+    say!("swath width:          {:.1} m", p.swath_width_m);
+    say!(
         "point density:        {:.2} points/m² per line",
         p.point_density_per_m2
     );
-    println!(
+    say!(
         "footprint diameter:   {:.3} m at nadir",
         p.footprint_diameter_m
     );
-    println!(
+    say!(
         "expected run size:    ~{} points, points.las ~{:.1} MB",
         p.pulses,
         p.expected_las_bytes as f64 / 1e6
     );
     for l in &p.lines {
-        println!(
+        say!(
             "  line {}: {} pulses, {:.1} s, {:.1} m above ground, swath {:.1} m, {:.2} pts/m², \
              scan lines every {:.2} m, footprints every {:.2} m across",
             l.line,

@@ -282,3 +282,38 @@ fn seed_changes_noise_but_not_geometry() {
     assert_ne!(a, c);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn one_and_two_threads_write_identical_files() {
+    let noisy = GOOD
+        .replace(
+            "[output]",
+            "[receiver]\nnoise = 0.01\nspeckle = true\n\n[platform]\nsway = true\n\n[output]",
+        )
+        .replace("end_m = [0.0, 10.0, 300.0]", "end_m = [0.0, 60.0, 300.0]");
+    let dir = temp("threads12");
+    std::fs::write(dir.join("s.toml"), &noisy).unwrap();
+    let run = |threads: &str| {
+        let out = dir.join(format!("t{threads}"));
+        let o = bin()
+            .arg("run")
+            .arg(dir.join("s.toml"))
+            .args(["--threads", threads, "-o"])
+            .arg(&out)
+            .env("SOURCE_DATE_EPOCH", "1790000000")
+            .output()
+            .unwrap();
+        assert!(o.status.success());
+        out
+    };
+    let (a, b) = (run("1"), run("2"));
+    for f in ["points.las", "points.xyz", "trajectory.csv"] {
+        let (x, y) = (
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+        );
+        assert!(x.len() > 1000, "{f} is too small to mean anything");
+        assert!(x == y, "{f} differs between 1 and 2 threads");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

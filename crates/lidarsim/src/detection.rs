@@ -123,10 +123,17 @@ impl Detector {
     }
 
     /// Detects the echoes of `wf` into `out` (cleared first), in time order.
-    /// `signal` is scratch space.
-    pub fn detect(&self, wf: &Waveform, signal: &mut Vec<f64>, out: &mut Vec<Echo>) {
+    /// `signal` and `peaks` are scratch space.
+    pub fn detect(
+        &self,
+        wf: &Waveform,
+        signal: &mut Vec<f64>,
+        peaks: &mut Vec<usize>,
+        out: &mut Vec<Echo>,
+    ) {
         out.clear();
         signal.clear();
+        peaks.clear();
         signal.extend(wf.samples.iter().zip(&wf.background).map(|(s, b)| s - b));
         let s = &signal[..];
         let n = s.len();
@@ -134,29 +141,33 @@ impl Detector {
             return;
         }
         // Candidate maxima above the threshold.
-        let mut peaks: Vec<usize> = (1..n - 1)
-            .filter(|&b| s[b] > self.threshold && s[b] > s[b - 1] && s[b] >= s[b + 1])
-            .collect();
+        peaks.extend(
+            (1..n - 1).filter(|&b| s[b] > self.threshold && s[b] > s[b - 1] && s[b] >= s[b + 1]),
+        );
         // Keep those that stand out by the threshold: the higher of the two
         // valleys separating a peak from higher ground (or from the window
         // edge) must lie at least the threshold below it.
         peaks.retain(|&p| prominence(s, p) >= self.threshold);
         // An echo cannot be much narrower than the emitted pulse: a maximum
-        // narrower than half of it is a noise spike, not a target.
-        peaks.retain(|&p| half_max_width(s, p, 0, n - 1) >= self.min_width_bins);
+        // narrower than half of it is a noise spike, not a target. Its width
+        // is measured halfway between its top and its base (the higher of
+        // the valleys separating it from its neighbours), so that a spike
+        // riding on the tail of a strong echo shows its own width.
+        let mut k = 0;
+        while k < peaks.len() {
+            let (lo, hi) = extent(s, peaks, k);
+            let p = peaks[k];
+            let base = s[argmin(s, lo, p)].max(s[argmin(s, p, hi)]).max(0.0);
+            let level = 0.5 * (s[p] + base);
+            if width_at(s, p, lo, hi, level) < self.min_width_bins {
+                peaks.remove(k);
+            } else {
+                k += 1;
+            }
+        }
         peaks.truncate(self.config.max_returns);
         for (k, &p) in peaks.iter().enumerate() {
-            // Extent: down to the lowest point between neighbouring echoes.
-            let lo = if k == 0 {
-                0
-            } else {
-                argmin(s, peaks[k - 1], p)
-            };
-            let hi = if k + 1 < peaks.len() {
-                argmin(s, p, peaks[k + 1])
-            } else {
-                n - 1
-            };
+            let (lo, hi) = extent(s, peaks, k);
             let (offset, peak_amplitude) = refine(s, p, self.fit_half, lo, hi);
             let width = half_max_width(s, p, lo, hi);
             let amplitude = energy(s, p, width, lo, hi) / self.unit_energy;
@@ -202,6 +213,23 @@ fn bias_table(receiver: &Receiver, fit_half: usize) -> Vec<(f64, f64)> {
         .collect();
     table.sort_by(|a, b| a.0.total_cmp(&b.0));
     table
+}
+
+/// The bins attributed to the `k`-th peak: down to the lowest points
+/// between it and its neighbouring peaks, or to the window's ends.
+fn extent(s: &[f64], peaks: &[usize], k: usize) -> (usize, usize) {
+    let p = peaks[k];
+    let lo = if k == 0 {
+        0
+    } else {
+        argmin(s, peaks[k - 1], p)
+    };
+    let hi = if k + 1 < peaks.len() {
+        argmin(s, p, peaks[k + 1])
+    } else {
+        s.len() - 1
+    };
+    (lo, hi)
 }
 
 /// Topographic prominence of the maximum at `p`.
@@ -296,18 +324,23 @@ fn solve3(m: [[f64; 3]; 3], v: [f64; 3]) -> Option<[f64; 3]> {
 /// Full width at half maximum of the peak at `p`, in bins, searching no
 /// further than `[lo, hi]`; crossings interpolated linearly.
 fn half_max_width(s: &[f64], p: usize, lo: usize, hi: usize) -> f64 {
-    let half = 0.5 * s[p];
+    width_at(s, p, lo, hi, 0.5 * s[p])
+}
+
+/// Width of the peak at `p` where it crosses `level`, in bins, searching no
+/// further than `[lo, hi]`; crossings interpolated linearly.
+fn width_at(s: &[f64], p: usize, lo: usize, hi: usize, level: f64) -> f64 {
     let mut left = lo as f64;
     for i in (lo..p).rev() {
-        if s[i] < half {
-            left = i as f64 + (half - s[i]) / (s[i + 1] - s[i]);
+        if s[i] < level {
+            left = i as f64 + (level - s[i]) / (s[i + 1] - s[i]);
             break;
         }
     }
     let mut right = hi as f64;
     for i in p + 1..=hi {
-        if s[i] < half {
-            right = (i - 1) as f64 + (s[i - 1] - half) / (s[i - 1] - s[i]);
+        if s[i] < level {
+            right = (i - 1) as f64 + (s[i - 1] - level) / (s[i - 1] - s[i]);
             break;
         }
     }
@@ -352,7 +385,7 @@ mod tests {
         let mut wf = Waveform::default();
         rx.synthesize(returns, &mut rng, &mut wf);
         let mut out = Vec::new();
-        det.detect(&wf, &mut Vec::new(), &mut out);
+        det.detect(&wf, &mut Vec::new(), &mut Vec::new(), &mut out);
         out
     }
 
@@ -418,6 +451,33 @@ mod tests {
         // A merged echo carries the energy of both.
         let m = two(0.2);
         assert!((m[0].amplitude - 0.4).abs() < 0.4 * 0.02);
+    }
+
+    #[test]
+    fn a_spike_on_the_tail_of_an_echo_is_not_an_echo() {
+        // The detector expects noise σ = 0.01; the waveform itself is clean
+        // so that the spike is the only disturbance.
+        let (_, det) = setup(PulseShape::RiseTail { fwhm_s: 3e-9 }, 0.01);
+        let (quiet, _) = setup(PulseShape::RiseTail { fwhm_s: 3e-9 }, 0.0);
+        let mut wf = Waveform::default();
+        let mut rng = Stream::new(0, 0, 0, Purpose::Test);
+        quiet.synthesize(
+            &[Return {
+                range_m: 150.0,
+                power: 2.0,
+            }],
+            &mut rng,
+            &mut wf,
+        );
+        // A one-bin spike of 0.2 on the long tail, 8 bins after the peak,
+        // where the tail is still above half the spike's top.
+        let peak = (0..wf.samples.len())
+            .max_by(|&a, &b| wf.samples[a].total_cmp(&wf.samples[b]))
+            .unwrap();
+        wf.samples[peak + 8] += 0.2;
+        let mut out = Vec::new();
+        det.detect(&wf, &mut Vec::new(), &mut Vec::new(), &mut out);
+        assert_eq!(out.len(), 1, "{out:?}");
     }
 
     #[test]

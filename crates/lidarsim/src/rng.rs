@@ -71,14 +71,12 @@ impl Stream {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
-    /// Standard normal deviate (Box–Muller; one of the pair is discarded so
-    /// that the stream position depends only on the number of calls).
+    /// Standard normal deviate (the ziggurat method of Marsaglia & Tsang,
+    /// as implemented by `rand_distr::StandardNormal`).
     #[inline]
     pub fn normal(&mut self) -> f64 {
-        // 1 - u lies in (0, 1], so the logarithm is finite.
-        let u1 = 1.0 - self.uniform();
-        let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (core::f64::consts::TAU * u2).cos()
+        use rand_distr::Distribution;
+        rand_distr::StandardNormal.sample(self)
     }
 }
 

@@ -50,6 +50,8 @@ pub struct Summary {
     pub points_by_return: Vec<u64>,
     /// Sub-rays per pulse.
     pub subrays_per_pulse: usize,
+    /// Laser wavelength, nm (for the record: reflectances are given at it).
+    pub wavelength_nm: f64,
     /// Wall-clock time of the simulation (scene indexing excluded), s.
     pub wall_time_s: f64,
     /// Time to build the acceleration structure, s.
@@ -181,6 +183,7 @@ fn summarize(
         pulses_with_echo: counts.pulses_with_echo,
         points_by_return: counts.points_by_return[..last].to_vec(),
         subrays_per_pulse: survey.scanner.subrays,
+        wavelength_nm: survey.scanner.wavelength_nm,
         wall_time_s,
         index_time_s,
         pulses_per_second: if wall_time_s > 0.0 {

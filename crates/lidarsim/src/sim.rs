@@ -68,6 +68,7 @@ pub struct Scratch {
     return_prims: Vec<u32>,
     waveform: Waveform,
     signal: Vec<f64>,
+    peaks: Vec<usize>,
     echoes: Vec<Echo>,
     /// Energy per primitive within one echo.
     energy_by_prim: Vec<(u32, f64)>,
@@ -212,8 +213,12 @@ impl<'a> Simulator<'a> {
         let mut noise_rng = Stream::new(s.seed, line.index, k, Purpose::ReceiverNoise);
         self.receiver
             .synthesize(&scratch.returns, &mut noise_rng, &mut scratch.waveform);
-        self.detector
-            .detect(&scratch.waveform, &mut scratch.signal, &mut scratch.echoes);
+        self.detector.detect(
+            &scratch.waveform,
+            &mut scratch.signal,
+            &mut scratch.peaks,
+            &mut scratch.echoes,
+        );
         let n = scratch.echoes.len();
         if n == 0 {
             return 0;

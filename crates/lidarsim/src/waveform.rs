@@ -131,6 +131,10 @@ pub struct Waveform {
     /// Expected background (atmosphere) in each bin; zero without
     /// atmosphere. Detection thresholds are set above it.
     pub background: Vec<f64>,
+    /// The returns placed on the time axis before convolution (kept to
+    /// reuse the allocation; also the noise-free "sum of sub-ray returns"
+    /// of specification Fig. 6).
+    pub impulses: Vec<f64>,
 }
 
 /// One sub-ray return on the time axis.
@@ -202,6 +206,7 @@ impl Receiver {
     pub fn synthesize(&self, returns: &[Return], noise_rng: &mut Stream, out: &mut Waveform) {
         out.samples.clear();
         out.background.clear();
+        out.impulses.clear();
         if returns.is_empty() {
             return;
         }
@@ -218,7 +223,9 @@ impl Receiver {
         let last = hi.floor() as i64 + 1 + ka + GUARD_BINS;
         let n = (last - first + 1) as usize;
         // Impulse train.
-        let mut impulses = vec![0.0; n];
+        let impulses = &mut out.impulses;
+        impulses.clear();
+        impulses.resize(n, 0.0);
         for r in returns {
             let x = range_to_bin(r.range_m, bin_s);
             let b = x.floor();
@@ -230,16 +237,19 @@ impl Receiver {
         // Convolution: out[b] = Σ_i impulses[i] · kernel[b − i + k0].
         out.first_bin = first;
         out.samples.resize(n, 0.0);
-        for (i, &p) in impulses.iter().enumerate() {
+        // The window has k0 + GUARD_BINS bins before the first impulse and
+        // the kernel's tail + GUARD_BINS after the last, so the kernel
+        // always fits.
+        for (i, &p) in out.impulses.iter().enumerate() {
             if p == 0.0 {
                 continue;
             }
-            let start = i as i64 - k0;
-            for (j, &k) in self.kernel.iter().enumerate() {
-                let b = start + j as i64;
-                if (0..n as i64).contains(&b) {
-                    out.samples[b as usize] += p * k;
-                }
+            let start = i - self.k0;
+            for (o, &k) in out.samples[start..start + self.kernel.len()]
+                .iter_mut()
+                .zip(&self.kernel)
+            {
+                *o += p * k;
             }
         }
         // Atmosphere: path radiance falls with range squared.

@@ -261,10 +261,10 @@ impl Scene {
             .fold(Aabb::EMPTY, |b, p| b.union(p.bounds()))
     }
 
-    /// Adds a material and returns its id; a material with the same name is
-    /// reused.
+    /// Adds a material and returns its id; an identical material (same
+    /// name and values) is reused.
     pub fn add_material(&mut self, material: Material) -> MaterialId {
-        if let Some(i) = self.materials.iter().position(|m| m.name == material.name) {
+        if let Some(i) = self.materials.iter().position(|m| *m == material) {
             return i as MaterialId;
         }
         self.materials.push(material);

@@ -89,6 +89,9 @@ pub enum MeshError {
     },
 }
 
+/// Name of the pseudo material library holding the survey's materials.
+const SURVEY_LIBRARY: &str = "<survey materials>";
+
 /// Where a mesh goes in the world and what it defaults to.
 #[derive(Clone, Debug)]
 pub struct MeshPlacement {
@@ -155,8 +158,31 @@ pub fn load_obj(
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(&text[..]), &options, |p| {
-        tobj::load_mtl(base.join(p))
+    // The survey's materials are offered to the OBJ parser as one more
+    // material library, named by a line put in front of the file, so that
+    // `usemtl NAME` of a survey-only material starts its own group of faces.
+    let mut source = format!("mtllib {SURVEY_LIBRARY}\n").into_bytes();
+    source.extend_from_slice(&text);
+    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(&source[..]), &options, |p| {
+        if p == Path::new(SURVEY_LIBRARY) {
+            let mut names: Vec<&String> = survey_materials.keys().collect();
+            names.sort();
+            let list = names
+                .iter()
+                .map(|n| tobj::Material {
+                    name: (*n).clone(),
+                    ..Default::default()
+                })
+                .collect();
+            let index = names
+                .iter()
+                .enumerate()
+                .map(|(i, n)| ((*n).clone(), i))
+                .collect();
+            Ok((list, index))
+        } else {
+            tobj::load_mtl(base.join(p))
+        }
     })
     .map_err(|e| MeshError::Parse {
         path: path.to_path_buf(),
@@ -177,10 +203,18 @@ pub fn load_obj(
     // Resolve every MTL material to a scene material and class hint.
     let mut resolved: Vec<(u32, Option<SurfaceClass>)> = Vec::with_capacity(mtl_materials.len());
     for m in &mtl_materials {
-        let class_hint = m
-            .unknown_param
-            .get("class")
-            .and_then(|c| SurfaceClass::from_name(c));
+        let class_hint = match m.unknown_param.get("class") {
+            None => None,
+            Some(c) => Some(
+                SurfaceClass::from_name(c).ok_or_else(|| MeshError::BadMaterial {
+                    name: m.name.clone(),
+                    reason: format!(
+                        "unknown class '{c}'; expected one of: {}",
+                        SurfaceClass::ALL.map(|(n, _)| n).join(", ")
+                    ),
+                })?,
+            ),
+        };
         let material = match survey_materials.get(&m.name) {
             Some(sm) => sm.clone(),
             None => mtl_to_material(m)?,
@@ -357,6 +391,49 @@ mod tests {
         let b = scene.bounds();
         assert_eq!(b.min, DVec3::new(10.0, 0.0, 0.0));
         assert_eq!(b.max, DVec3::new(12.0, 2.0, 0.0));
+
+        // `usemtl` of a material defined only in the survey, and two MTL
+        // materials of the same name with different values in two meshes.
+        std::fs::write(
+            dir.join("s.obj"),
+            "mtllib h.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl paint\nf 1 2 3\n\
+             usemtl survey_only\nf 1 2 3\n",
+        )
+        .unwrap();
+        std::fs::write(dir.join("h2.mtl"), "newmtl paint\nreflectance 0.1\n").unwrap();
+        std::fs::write(
+            dir.join("t.obj"),
+            "mtllib h2.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl paint\nf 1 2 3\n",
+        )
+        .unwrap();
+        let mut survey = HashMap::new();
+        survey.insert(
+            "survey_only".to_string(),
+            Material {
+                name: "survey_only".into(),
+                reflectance: 0.33,
+                incidence_exponent: 1.0,
+            },
+        );
+        let mut scene = Scene::default();
+        load_obj(&dir.join("s.obj"), &placement, &survey, &mut scene).unwrap();
+        load_obj(&dir.join("t.obj"), &placement, &survey, &mut scene).unwrap();
+        let refl: Vec<f64> = scene
+            .primitives
+            .iter()
+            .map(|p| scene.materials[p.material as usize].reflectance)
+            .collect();
+        assert_eq!(refl, [0.7, 0.33, 0.1]);
+
+        // A class an MTL names that does not exist is an error.
+        std::fs::write(dir.join("c.mtl"), "newmtl x\nKd 0.5 0.5 0.5\nclass rooof\n").unwrap();
+        std::fs::write(
+            dir.join("c.obj"),
+            "mtllib c.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl x\nf 1 2 3\n",
+        )
+        .unwrap();
+        let e = load_obj(&dir.join("c.obj"), &placement, &survey, &mut scene).unwrap_err();
+        assert!(e.to_string().contains("unknown class 'rooof'"), "{e}");
 
         // A usemtl that nothing defines is an error naming the line.
         std::fs::write(

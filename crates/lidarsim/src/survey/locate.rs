@@ -91,22 +91,32 @@ impl<'a> Locator<'a> {
     /// Byte range of the value at `path`, or of the deepest part of the path
     /// that exists (a missing key points at its table).
     pub fn span_of(&self, path: &KeyPath) -> Option<Range<usize>> {
+        self.find(path).map(|(_, value)| value)
+    }
+
+    /// Byte range of the key that ends `path` (of the value when the path
+    /// ends in an array index), or of the deepest part that exists.
+    pub fn key_span_of(&self, path: &KeyPath) -> Option<Range<usize>> {
+        self.find(path).map(|(key, value)| key.unwrap_or(value))
+    }
+
+    fn find(&self, path: &KeyPath) -> Option<(Option<Range<usize>>, Range<usize>)> {
         let root = self.root.as_ref()?;
         let mut best = None;
         let mut table: Option<&DeTable<'_>> = Some(root.get_ref());
         let mut array: Option<&[toml::Spanned<DeValue<'_>>]> = None;
         for seg in &path.0 {
-            let next: &toml::Spanned<DeValue<'_>> = match seg {
-                Seg::Key(k) => match table.and_then(|t| t.get(k.as_str())) {
-                    Some(v) => v,
+            let (key, next): (Option<Range<usize>>, &toml::Spanned<DeValue<'_>>) = match seg {
+                Seg::Key(k) => match table.and_then(|t| t.get_key_value(k.as_str())) {
+                    Some((key, v)) => (Some(key.span()), v),
                     None => break,
                 },
                 Seg::Index(i) => match array.and_then(|a| a.get(*i)) {
-                    Some(v) => v,
+                    Some(v) => (None, v),
                     None => break,
                 },
             };
-            best = Some(next.span());
+            best = Some((key, next.span()));
             table = None;
             array = None;
             match next.get_ref() {

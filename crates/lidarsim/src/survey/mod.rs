@@ -304,7 +304,7 @@ impl Survey {
                 } else {
                     key.key(name)
                 };
-                if let Some(s) = locator.span_of(&candidate) {
+                if let Some(s) = locator.key_span_of(&candidate) {
                     span = s;
                     key = candidate;
                 }
