@@ -265,6 +265,7 @@ pub fn demo_survey() -> RawSurvey {
         materials,
         polygons,
         meshes: Vec::new(),
+        ..Default::default()
     }
 }
 

@@ -26,6 +26,10 @@ pub enum Purpose {
     ReceiverNoise = 2,
     /// Phases of the attitude sway of one flight line (pulse index 0).
     Sway = 3,
+    /// The interception lottery of a pulse's sub-rays in tree crowns.
+    Canopy = 4,
+    /// Placement of generated forests (line = forest index).
+    Forest = 5,
     /// Spare purpose for tests and user extensions.
     Test = 0xFFFF,
 }

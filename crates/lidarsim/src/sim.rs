@@ -15,7 +15,8 @@ use std::time::Instant;
 
 use rayon::prelude::*;
 
-use crate::accel::{Hit, RayCaster};
+use crate::accel::{PulseTrace, RayCaster, VolumeSpan};
+use crate::canopy::{CanopyConfig, Fate, march};
 use crate::detection::{Detector, Echo};
 use crate::geometry::{DVec3, Ray};
 use crate::output::{PointRecord, PointSink};
@@ -23,12 +24,19 @@ use crate::platform::FlightLine;
 use crate::radiometry::{Speckle, surface_return};
 use crate::rng::{Purpose, Stream};
 use crate::scanner::{BeamPattern, Mirror};
-use crate::scene::SurfaceClass;
+use crate::scene::{Shape, SurfaceClass};
 use crate::survey::Survey;
 use crate::waveform::{Receiver, Return, Waveform, range_to_bin};
 
 /// ASPRS class of an echo no surface contributed to (receiver noise).
 pub const NOISE_CLASS: u8 = 7;
+
+/// [`PointRecord::component`] of an echo from a surface.
+pub const COMPONENT_SURFACE: u8 = 0;
+/// [`PointRecord::component`] of an echo from foliage in a crown.
+pub const COMPONENT_FOLIAGE: u8 = 1;
+/// [`PointRecord::component`] of an echo from a trunk.
+pub const COMPONENT_TRUNK: u8 = 2;
 
 /// Pulses per parallel work unit.
 pub const BLOCK_PULSES: u64 = 2048;
@@ -62,7 +70,8 @@ impl RunCounts {
 pub struct Scratch {
     local_dirs: Vec<DVec3>,
     dirs: Vec<DVec3>,
-    hits: Vec<Option<Hit>>,
+    trace: PulseTrace,
+    spans: Vec<VolumeSpan>,
     returns: Vec<Return>,
     /// Primitive of each return (parallel to `returns`).
     return_prims: Vec<u32>,
@@ -99,6 +108,7 @@ pub struct Simulator<'a> {
     detector: Detector,
     pattern: BeamPattern,
     speckle: Option<Speckle>,
+    canopy: CanopyConfig,
     time_offset_s: f64,
 }
 
@@ -113,6 +123,7 @@ impl<'a> Simulator<'a> {
             caster,
             pattern: BeamPattern::new(survey.scanner.subrays, survey.scanner.divergence_rad),
             speckle: survey.speckle_looks.and_then(Speckle::new),
+            canopy: survey.canopy,
             receiver,
             detector,
             time_offset_s: survey.output.gps_start_time_s.unwrap_or(0.0),
@@ -162,47 +173,68 @@ impl<'a> Simulator<'a> {
         scratch
             .dirs
             .extend(scratch.local_dirs.iter().map(|d| rot * *d));
-        scratch.hits.clear();
-        scratch.hits.resize(scratch.dirs.len(), None);
-        self.caster.cast_pulse(
+        self.caster.trace_pulse(
             origin,
             &scratch.dirs,
             s.scanner.min_range_m,
             s.scanner.max_range_m,
-            &mut scratch.hits,
+            &mut scratch.spans,
+            &mut scratch.trace,
         );
 
-        // Eq. 2 for every sub-ray that hit something.
+        // Each sub-ray: through the crowns on its way (the interception
+        // lottery), then Eq. 2 at the surface it reaches.
         let scene = self.caster.scene();
+        let rn = s.receiver.reference_range_m;
         let mut speckle_rng = Stream::new(s.seed, line.index, k, Purpose::Speckle);
+        let mut canopy_rng = Stream::new(s.seed, line.index, k, Purpose::Canopy);
         scratch.returns.clear();
         scratch.return_prims.clear();
-        for ((hit, dir), share) in scratch
-            .hits
-            .iter()
-            .zip(&scratch.dirs)
-            .zip(self.pattern.weights())
-        {
-            let Some(hit) = hit else { continue };
-            let prim = &scene.primitives[hit.prim as usize];
-            let mat = &scene.materials[prim.material as usize];
-            let cos_inc = (-dir.dot(hit.normal)).clamp(0.0, 1.0);
-            let mut power = surface_return(
-                *share,
-                hit.t,
-                s.receiver.reference_range_m,
-                mat.reflectance,
-                cos_inc,
-                mat.incidence_exponent,
-            );
+        for (i, (dir, share)) in scratch.dirs.iter().zip(self.pattern.weights()).enumerate() {
+            let spans = scratch.trace.spans_of(i);
+            let fate = if spans.is_empty() {
+                Fate::Passed { transmission: 1.0 }
+            } else {
+                let ray = Ray { origin, dir: *dir };
+                march(scene, &ray, spans, &self.canopy, &mut canopy_rng)
+            };
+            let (range_m, prim, mut power) = match fate {
+                Fate::Intercepted {
+                    t,
+                    prim,
+                    density,
+                    transmission,
+                } => {
+                    let mat = &scene.materials[scene.primitives[prim as usize].material as usize];
+                    // Foliage: no incidence term (specification, "LiDAR
+                    // pulse in vegetation").
+                    let power = share * transmission * (rn / t).powi(2) * mat.reflectance * density;
+                    (t, prim, power)
+                }
+                Fate::Passed { transmission } => {
+                    let Some(hit) = scratch.trace.hits[i] else {
+                        continue;
+                    };
+                    let prim = &scene.primitives[hit.prim as usize];
+                    let mat = &scene.materials[prim.material as usize];
+                    let cos_inc = (-dir.dot(hit.normal)).clamp(0.0, 1.0);
+                    let power = transmission
+                        * surface_return(
+                            *share,
+                            hit.t,
+                            rn,
+                            mat.reflectance,
+                            cos_inc,
+                            mat.incidence_exponent,
+                        );
+                    (hit.t, hit.prim, power)
+                }
+            };
             if let Some(sp) = &self.speckle {
                 power *= sp.factor(&mut speckle_rng);
             }
-            scratch.returns.push(Return {
-                range_m: hit.t,
-                power,
-            });
-            scratch.return_prims.push(hit.prim);
+            scratch.returns.push(Return { range_m, power });
+            scratch.return_prims.push(prim);
         }
         if scratch.returns.is_empty() {
             scratch.waveform.samples.clear();
@@ -256,7 +288,7 @@ impl<'a> Simulator<'a> {
                 .iter()
                 .copied()
                 .reduce(|a, b| if b.1 > a.1 { b } else { a });
-            let (classification, object_id) = match best {
+            let (classification, object_id, component) = match best {
                 Some((p, _)) => {
                     let prim = &scene.primitives[p as usize];
                     let h = if prim.class == SurfaceClass::Vegetation {
@@ -264,9 +296,14 @@ impl<'a> Simulator<'a> {
                     } else {
                         0.0
                     };
-                    (prim.class.asprs_code(h), prim.object)
+                    let component = match prim.shape {
+                        Shape::Crown(_) => COMPONENT_FOLIAGE,
+                        Shape::Trunk(_) => COMPONENT_TRUNK,
+                        _ => COMPONENT_SURFACE,
+                    };
+                    (prim.class.asprs_code(h), prim.object, component)
                 }
-                None => (NOISE_CLASS, u32::MAX),
+                None => (NOISE_CLASS, u32::MAX, COMPONENT_SURFACE),
             };
             out.push(PointRecord {
                 position_m: position,
@@ -286,6 +323,7 @@ impl<'a> Simulator<'a> {
                 point_source_id: (line.index + 1).min(u16::MAX as u32) as u16,
                 pulse_index: k,
                 object_id,
+                component,
             });
         }
         n

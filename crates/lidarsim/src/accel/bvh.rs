@@ -7,7 +7,7 @@
 //! `f64` primitives: a box test may let through a primitive that the exact
 //! `f64` test then rejects, never the reverse.
 
-use super::{Hit, RayCaster, make_hit};
+use super::{Hit, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
 use crate::geometry::{Aabb, DVec3, Ray};
 use crate::scene::{Primitive, Scene};
 
@@ -319,18 +319,21 @@ fn partition(items: &mut [u32], pred: impl Fn(&u32) -> bool) -> usize {
     i
 }
 
-impl RayCaster for Bvh {
-    fn scene(&self) -> &Scene {
-        &self.scene
-    }
-
-    fn closest_hit_where(
+impl Bvh {
+    /// Closest-first traversal: the closest accepted surface within
+    /// `(t_min, t_max)`, and, when `spans` is given, the volumes whose
+    /// bounds the ray enters before the closest surface.
+    fn traverse(
         &self,
         ray: &Ray,
         t_min: f64,
         t_max: f64,
         accept: &dyn Fn(&Primitive) -> bool,
+        mut spans: Option<&mut Vec<VolumeSpan>>,
     ) -> Option<Hit> {
+        if let Some(s) = spans.as_deref_mut() {
+            s.clear();
+        }
         if self.nodes.is_empty() {
             return None;
         }
@@ -349,7 +352,13 @@ impl RayCaster for Bvh {
                 let first = n.left_or_first as usize;
                 for &p in &self.order[first..first + n.count as usize] {
                     let prim = &self.scene.primitives[p as usize];
-                    if let Some(t) = prim.intersect(ray, t_min, best_t)
+                    if prim.is_volume() {
+                        if let Some(s) = spans.as_deref_mut()
+                            && let Some(v) = volume_span(prim, p, ray, t_min, best_t)
+                        {
+                            s.push(v);
+                        }
+                    } else if let Some(t) = prim.intersect(ray, t_min, best_t)
                         && accept(prim)
                     {
                         best_t = t;
@@ -384,6 +393,9 @@ impl RayCaster for Bvh {
             // Pop the next node still worth visiting.
             loop {
                 if sp == 0 {
+                    if let Some(s) = spans {
+                        finish_spans(s, best_t);
+                    }
                     return best.map(|p| make_hit(&self.scene, p, ray, best_t));
                 }
                 sp -= 1;
@@ -394,6 +406,26 @@ impl RayCaster for Bvh {
                 }
             }
         }
+    }
+}
+
+impl RayCaster for Bvh {
+    fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    fn closest_hit_where(
+        &self,
+        ray: &Ray,
+        t_min: f64,
+        t_max: f64,
+        accept: &dyn Fn(&Primitive) -> bool,
+    ) -> Option<Hit> {
+        self.traverse(ray, t_min, t_max, accept, None)
+    }
+
+    fn trace(&self, ray: &Ray, t_min: f64, t_max: f64, spans: &mut Vec<VolumeSpan>) -> Option<Hit> {
+        self.traverse(ray, t_min, t_max, &|_| true, Some(spans))
     }
 }
 

@@ -29,13 +29,58 @@ pub struct Hit {
     pub normal: DVec3,
 }
 
+/// The part of a ray inside the bounds of a volume primitive (a crown).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VolumeSpan {
+    /// Index of the volume primitive.
+    pub prim: u32,
+    /// Where the ray enters the volume's bounds, m.
+    pub t_in: f64,
+    /// Where it leaves them (or meets the closest surface), m.
+    pub t_out: f64,
+}
+
+/// Closest hits and volume spans of all sub-rays of one pulse.
+#[derive(Clone, Debug, Default)]
+pub struct PulseTrace {
+    /// Closest surface hit of each sub-ray.
+    pub hits: Vec<Option<Hit>>,
+    spans: Vec<VolumeSpan>,
+    ranges: Vec<(u32, u32)>,
+}
+
+impl PulseTrace {
+    /// Empties the trace for `n` sub-rays.
+    pub fn clear(&mut self) {
+        self.hits.clear();
+        self.spans.clear();
+        self.ranges.clear();
+    }
+
+    /// Records the result of the next sub-ray: its hit and the spans that
+    /// [`RayCaster::trace`] left in `spans`.
+    pub fn push(&mut self, hit: Option<Hit>, spans: &[VolumeSpan]) {
+        let start = self.spans.len() as u32;
+        self.spans.extend_from_slice(spans);
+        self.ranges.push((start, self.spans.len() as u32));
+        self.hits.push(hit);
+    }
+
+    /// Volume spans of sub-ray `i`, sorted by entry distance.
+    pub fn spans_of(&self, i: usize) -> &[VolumeSpan] {
+        let (a, b) = self.ranges[i];
+        &self.spans[a as usize..b as usize]
+    }
+}
+
 /// Answers closest-hit queries over a scene.
 pub trait RayCaster: Send + Sync {
     /// The scene the structure was built over.
     fn scene(&self) -> &Scene;
 
-    /// The closest primitive hit within `(t_min, t_max)` whose primitive
-    /// passes `accept` (for example: only ground surfaces).
+    /// The closest surface hit within `(t_min, t_max)` whose primitive
+    /// passes `accept` (for example: only ground surfaces). Volumes are
+    /// passed through.
     fn closest_hit_where(
         &self,
         ray: &Ray,
@@ -44,23 +89,32 @@ pub trait RayCaster: Send + Sync {
         accept: &dyn Fn(&Primitive) -> bool,
     ) -> Option<Hit>;
 
-    /// The closest primitive hit within `(t_min, t_max)`.
+    /// The closest surface hit within `(t_min, t_max)`.
     fn closest_hit(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<Hit> {
         self.closest_hit_where(ray, t_min, t_max, &|_| true)
     }
 
-    /// Closest hits of all sub-rays of one pulse, which share `origin`.
-    /// `hits[i]` receives the hit of `dirs[i]` (unit vectors).
-    fn cast_pulse(
+    /// The closest surface hit within `(t_min, t_max)`, and in `spans`
+    /// (cleared first) every volume the ray passes before it, clipped to the
+    /// hit and sorted by entry distance: the closest-first order in which
+    /// the specification tests trees and surfaces.
+    fn trace(&self, ray: &Ray, t_min: f64, t_max: f64, spans: &mut Vec<VolumeSpan>) -> Option<Hit>;
+
+    /// [`RayCaster::trace`] for all sub-rays of one pulse, which share
+    /// `origin`; results in `out` (cleared first), in the order of `dirs`.
+    fn trace_pulse(
         &self,
         origin: DVec3,
         dirs: &[DVec3],
         t_min: f64,
         t_max: f64,
-        hits: &mut [Option<Hit>],
+        spans: &mut Vec<VolumeSpan>,
+        out: &mut PulseTrace,
     ) {
-        for (dir, hit) in dirs.iter().zip(hits.iter_mut()) {
-            *hit = self.closest_hit(&Ray { origin, dir: *dir }, t_min, t_max);
+        out.clear();
+        for dir in dirs {
+            let hit = self.trace(&Ray { origin, dir: *dir }, t_min, t_max, spans);
+            out.push(hit, spans);
         }
     }
 }
@@ -68,9 +122,40 @@ pub trait RayCaster: Send + Sync {
 /// Builds the hit record for primitive `prim` at distance `t`.
 #[inline]
 pub(crate) fn make_hit(scene: &Scene, prim: u32, ray: &Ray, t: f64) -> Hit {
-    let n = scene.primitives[prim as usize].normal();
+    let n = scene.primitives[prim as usize].normal_at(ray.at(t));
     let normal = if n.dot(ray.dir) > 0.0 { -n } else { n };
     Hit { t, prim, normal }
+}
+
+/// Keeps the spans that begin before `t_hit`, clipped to it, in order of
+/// entry.
+pub(crate) fn finish_spans(spans: &mut Vec<VolumeSpan>, t_hit: f64) {
+    spans.retain_mut(|s| {
+        s.t_out = s.t_out.min(t_hit);
+        s.t_in < s.t_out
+    });
+    spans.sort_by(|a, b| a.t_in.total_cmp(&b.t_in).then(a.prim.cmp(&b.prim)));
+}
+
+/// The span of a volume primitive along a ray, if any.
+#[inline]
+pub(crate) fn volume_span(
+    prim: &Primitive,
+    index: u32,
+    ray: &Ray,
+    t_min: f64,
+    t_max: f64,
+) -> Option<VolumeSpan> {
+    match &prim.shape {
+        crate::scene::Shape::Crown(c) => {
+            c.span(ray, t_min, t_max).map(|(t_in, t_out)| VolumeSpan {
+                prim: index,
+                t_in,
+                t_out,
+            })
+        }
+        _ => None,
+    }
 }
 
 /// Tests every primitive: slow, obviously correct, used as the reference.
@@ -108,5 +193,17 @@ impl RayCaster for BruteForce {
             }
         }
         best.map(|(t, i)| make_hit(&self.scene, i, ray, t))
+    }
+
+    fn trace(&self, ray: &Ray, t_min: f64, t_max: f64, spans: &mut Vec<VolumeSpan>) -> Option<Hit> {
+        let hit = self.closest_hit(ray, t_min, t_max);
+        spans.clear();
+        for (i, p) in self.scene.primitives.iter().enumerate() {
+            if let Some(s) = volume_span(p, i as u32, ray, t_min, t_max) {
+                spans.push(s);
+            }
+        }
+        finish_spans(spans, hit.map_or(t_max, |h| h.t));
+        hit
     }
 }

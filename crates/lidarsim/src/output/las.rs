@@ -163,7 +163,7 @@ impl PointSink for LasWriter {
                 (u8::from(p.scan_direction_positive) << 6) | (u8::from(p.edge_of_flight_line) << 7),
             );
             self.buf.push(p.classification);
-            self.buf.push(0); // user data
+            self.buf.push(p.component); // user data: what returned the echo
             // Scan angle in 0.006° increments, −30 000 … +30 000.
             let sa = (p.scan_angle_deg / 0.006)
                 .round()

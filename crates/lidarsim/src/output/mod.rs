@@ -53,6 +53,9 @@ pub struct PointRecord {
     pub pulse_index: u64,
     /// Scene object that returned most of the echo's energy.
     pub object_id: u32,
+    /// What returned it: 0 a surface, 1 foliage, 2 a trunk (written to the
+    /// LAS user data byte).
+    pub component: u8,
 }
 
 /// Receives the points of a survey in pulse order.

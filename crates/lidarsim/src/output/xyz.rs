@@ -9,7 +9,7 @@ use super::{AtomicFile, PointRecord, PointSink};
 /// The column names of the header line, in order.
 pub const XYZ_COLUMNS: &str = "x y z intensity return_number number_of_returns classification \
                                gps_time scan_angle_deg point_source_id amplitude echo_width_ns \
-                               range_m";
+                               range_m component";
 
 /// Writes `points.xyz`.
 #[derive(Debug)]
@@ -39,7 +39,7 @@ impl PointSink for XyzWriter {
             // Formatting into a String cannot fail.
             let _ = writeln!(
                 self.line,
-                "{:.3} {:.3} {:.3} {} {} {} {} {:.9} {:.3} {} {:.6} {:.3} {:.4}",
+                "{:.3} {:.3} {:.3} {} {} {} {} {:.9} {:.3} {} {:.6} {:.3} {:.4} {}",
                 p.position_m.x,
                 p.position_m.y,
                 p.position_m.z,
@@ -52,7 +52,8 @@ impl PointSink for XyzWriter {
                 p.point_source_id,
                 p.amplitude,
                 p.echo_width_ns,
-                p.range_m
+                p.range_m,
+                p.component
             );
             self.file.writer().write_all(self.line.as_bytes())?;
         }

@@ -6,11 +6,14 @@
 //! beyond the exact per-primitive intersection; finding the closest hit among
 //! many primitives is the job of [`crate::accel`].
 
+pub mod forest;
 mod obj;
 mod polygon;
+pub mod tree;
 
 pub use obj::{MeshError, MeshPlacement, load_obj};
 pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
+pub use tree::{Crown, Species, TreeSpec, Trunk};
 
 use crate::geometry::{Aabb, DVec3, Ray};
 
@@ -199,6 +202,10 @@ pub enum Shape {
     Polygon(Box<Polygon>),
     /// A mesh triangle.
     Triangle(Triangle),
+    /// A tree's stem: an opaque cone.
+    Trunk(Trunk),
+    /// A tree's crown: a volume the beam penetrates (never a closest hit).
+    Crown(Box<Crown>),
 }
 
 /// One surface of the scene.
@@ -220,24 +227,37 @@ impl Primitive {
         match &self.shape {
             Shape::Polygon(p) => p.bounds(),
             Shape::Triangle(t) => Aabb::from_points(&t.vertices()),
+            Shape::Trunk(t) => t.bounds(),
+            Shape::Crown(c) => c.bounds(),
         }
     }
 
+    /// True for volumes (crowns), which rays pass through.
+    #[inline]
+    pub fn is_volume(&self) -> bool {
+        matches!(self.shape, Shape::Crown(_))
+    }
+
     /// Distance to the surface along `ray`, if hit within `(t_min, t_max)`.
+    /// Volumes are never hit.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
         match &self.shape {
             Shape::Polygon(p) => p.intersect(ray, t_min, t_max),
             Shape::Triangle(t) => t.intersect(ray, t_min, t_max),
+            Shape::Trunk(t) => t.intersect(ray, t_min, t_max).map(|(d, _)| d),
+            Shape::Crown(_) => None,
         }
     }
 
-    /// Unit geometric normal (either side).
+    /// Unit surface normal at the point `p` on the surface (either side).
     #[inline]
-    pub fn normal(&self) -> DVec3 {
+    pub fn normal_at(&self, p: DVec3) -> DVec3 {
         match &self.shape {
-            Shape::Polygon(p) => p.normal(),
+            Shape::Polygon(poly) => poly.normal(),
             Shape::Triangle(t) => t.normal(),
+            Shape::Trunk(t) => t.normal_at(p),
+            Shape::Crown(_) => DVec3::Z,
         }
     }
 }
@@ -269,6 +289,35 @@ impl Scene {
         }
         self.materials.push(material);
         (self.materials.len() - 1) as MaterialId
+    }
+
+    /// Adds a tree as two primitives: its trunk (opaque, bark) and its crown
+    /// (a volume, foliage; no incidence term), both of class vegetation.
+    pub fn add_tree(&mut self, tree: &TreeSpec, whorl_spacing_m: f64, name: impl Into<String>) {
+        let object = self.add_object(name);
+        let species = tree.species.name();
+        let bark = self.add_material(Material {
+            name: format!("{species} bark"),
+            reflectance: tree.bark_reflectance,
+            incidence_exponent: 1.0,
+        });
+        let foliage = self.add_material(Material {
+            name: format!("{species} foliage"),
+            reflectance: tree.foliage_reflectance,
+            incidence_exponent: 0.0,
+        });
+        self.primitives.push(Primitive {
+            shape: Shape::Trunk(tree.trunk()),
+            material: bark,
+            class: SurfaceClass::Vegetation,
+            object,
+        });
+        self.primitives.push(Primitive {
+            shape: Shape::Crown(Box::new(tree.crown(whorl_spacing_m))),
+            material: foliage,
+            class: SurfaceClass::Vegetation,
+            object,
+        });
     }
 
     /// Adds an object record and returns its id.

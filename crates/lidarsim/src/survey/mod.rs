@@ -16,12 +16,16 @@ use std::collections::HashMap;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
+use crate::canopy::CanopyConfig;
 use crate::detection::DetectorConfig;
 use crate::geometry::DVec3;
 use crate::platform::{FlightLine, Sway, SwayConfig};
 use crate::scanner::{Mirror, MirrorProfile};
+use crate::scene::forest::{ForestSpec, generate};
+use crate::scene::tree::BREAST_HEIGHT_M;
 use crate::scene::{
-    Material, MeshPlacement, Polygon, Primitive, Scene, Shape, SurfaceClass, load_obj,
+    Material, MeshPlacement, Polygon, Primitive, Scene, Shape, Species, SurfaceClass, TreeSpec,
+    load_obj,
 };
 use crate::waveform::{PulseShape, ReceiverConfig};
 
@@ -153,6 +157,10 @@ pub struct Survey {
     pub turn_time_s: f64,
     /// Flight lines in flight order (sway seeded per line).
     pub lines: Vec<FlightLine>,
+    /// How sub-rays march through tree crowns.
+    pub canopy: CanopyConfig,
+    /// Trees placed by `[[forest]]` entries, per entry.
+    pub forest_trees: Vec<usize>,
     /// What to write.
     pub output: OutputSettings,
     /// The surfaces.
@@ -250,6 +258,246 @@ impl Checker {
             }),
         }
     }
+}
+
+/// Validates one `[[tree]]` entry.
+fn check_tree(
+    c: &mut Checker,
+    tp: &KeyPath,
+    t: &raw::RawTree,
+    survey_seed: u64,
+    index: usize,
+) -> Option<TreeSpec> {
+    let base = c.point(tp.key("position_m"), &t.position_m);
+    let species = match t.species.as_deref() {
+        None => {
+            c.err(
+                tp.key("species"),
+                "is required: \"pine\", \"spruce\" or \"birch\"",
+            );
+            None
+        }
+        Some(name) => Species::from_name(name).or_else(|| {
+            let names: Vec<&str> = Species::ALL.iter().map(|(n, _)| *n).collect();
+            c.err(
+                tp.key("species"),
+                format!(
+                    "unknown species '{name}'; expected one of: {}",
+                    names.join(", ")
+                ),
+            );
+            None
+        }),
+    };
+    let required = |c: &mut Checker, key: &str, v: Option<f64>, what: &str| {
+        if v.is_none() {
+            c.err(tp.key(key), format!("is required: {what}"));
+        }
+    };
+    required(c, "dbh_m", t.dbh_m, "diameter at breast height in metres");
+    required(c, "height_m", t.height_m, "tree height in metres");
+    required(
+        c,
+        "crown_base_m",
+        t.crown_base_m,
+        "height of the crown base in metres",
+    );
+    let dbh = c.number(tp.key("dbh_m"), t.dbh_m, 0.2, 0.0, true, 5.0, " m");
+    let height = c.number(
+        tp.key("height_m"),
+        t.height_m,
+        15.0,
+        BREAST_HEIGHT_M,
+        true,
+        150.0,
+        " m",
+    );
+    let crown_base = c.number(
+        tp.key("crown_base_m"),
+        t.crown_base_m,
+        5.0,
+        0.0,
+        false,
+        150.0,
+        " m",
+    );
+    if crown_base >= height {
+        c.err(
+            tp.key("crown_base_m"),
+            format!("must be below the tree top ({height} m), got {crown_base}"),
+        );
+    }
+    let (base, species) = (base?, species?);
+    if t.dbh_m.is_none() || t.height_m.is_none() || t.crown_base_m.is_none() {
+        return None;
+    }
+    let mut tree = TreeSpec::new(base, species, dbh, height, crown_base.min(height));
+    tree.foliage_reflectance = c.number(
+        tp.key("foliage_reflectance"),
+        t.foliage_reflectance,
+        tree.foliage_reflectance,
+        0.0,
+        false,
+        1.0,
+        "",
+    );
+    tree.bark_reflectance = c.number(
+        tp.key("bark_reflectance"),
+        t.bark_reflectance,
+        tree.bark_reflectance,
+        0.0,
+        false,
+        1.0,
+        "",
+    );
+    tree.crown_radius_m = c.positive(
+        tp.key("crown_radius_m"),
+        t.crown_radius_m,
+        tree.crown_radius_m,
+        " m",
+    );
+    tree.extinction_per_m = c.number(
+        tp.key("extinction_per_m"),
+        t.extinction_per_m,
+        tree.extinction_per_m,
+        0.0,
+        false,
+        100.0,
+        " 1/m",
+    );
+    tree.uniform_density = t
+        .uniform_density
+        .map(|d| c.number(tp.key("uniform_density"), Some(d), 0.5, 0.0, false, 1.0, ""));
+    tree.seed = t.seed.unwrap_or_else(|| {
+        crate::rng::mix64(survey_seed ^ (index as u64).wrapping_mul(0x9E37_79B9))
+    });
+    Some(tree)
+}
+
+/// Validates one `[[forest]]` entry.
+fn check_forest(
+    c: &mut Checker,
+    fp: &KeyPath,
+    f: &raw::RawForest,
+    survey_seed: u64,
+    index: usize,
+) -> Option<ForestSpec> {
+    let area = match (&f.rectangle_m, &f.area_m) {
+        (Some(r), None) => {
+            if r.len() != 4 || r.iter().any(|v| !v.is_finite()) || r[2] <= r[0] || r[3] <= r[1] {
+                c.err(
+                    fp.key("rectangle_m"),
+                    "must be [x_min, y_min, x_max, y_max] with x_max > x_min and y_max > y_min",
+                );
+                None
+            } else {
+                Some(vec![[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]])
+            }
+        }
+        (None, Some(a)) => {
+            if a.len() < 3
+                || a.iter()
+                    .any(|p| p.len() != 2 || p.iter().any(|v| !v.is_finite()))
+            {
+                c.err(
+                    fp.key("area_m"),
+                    "must be a list of at least 3 [x, y] points (the stand's outline)",
+                );
+                None
+            } else {
+                Some(a.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>())
+            }
+        }
+        (Some(_), Some(_)) => {
+            c.err(
+                fp.key("area_m"),
+                "give either rectangle_m or area_m, not both",
+            );
+            None
+        }
+        (None, None) => {
+            c.err(
+                fp.clone(),
+                "needs rectangle_m = [x_min, y_min, x_max, y_max] or area_m = [[x, y], ...]",
+            );
+            None
+        }
+    };
+    if f.stems_per_ha.is_none() {
+        c.err(
+            fp.key("stems_per_ha"),
+            "is required: stem density in trees per hectare",
+        );
+    }
+    let stems = c.number(
+        fp.key("stems_per_ha"),
+        f.stems_per_ha,
+        500.0,
+        0.0,
+        true,
+        20_000.0,
+        " /ha",
+    );
+    let mix: Vec<(Species, f64)> = match &f.species {
+        None => vec![(Species::Pine, 1.0)],
+        Some(m) => {
+            let mut mix = Vec::new();
+            for (name, w) in m {
+                match Species::from_name(name) {
+                    Some(s) if w.is_finite() && *w > 0.0 => mix.push((s, *w)),
+                    Some(_) => c.err(
+                        fp.key("species").key(name),
+                        format!("weight must be greater than 0, got {w}"),
+                    ),
+                    None => c.err(
+                        fp.key("species").key(name),
+                        format!("unknown species '{name}'; expected pine, spruce or birch"),
+                    ),
+                }
+            }
+            if mix.is_empty() && !m.is_empty() {
+                return None;
+            }
+            if mix.is_empty() {
+                c.err(fp.key("species"), "names no species");
+                return None;
+            }
+            mix
+        }
+    };
+    let heights = match &f.height_m {
+        None => (15.0, 25.0),
+        Some(h) if h.len() == 2 && h[0] > BREAST_HEIGHT_M + 0.5 && h[1] >= h[0] && h[1] < 150.0 => {
+            (h[0], h[1])
+        }
+        Some(_) => {
+            c.err(
+                fp.key("height_m"),
+                "must be [smallest, largest] tree height in metres, from 1.8 m up, smallest first",
+            );
+            (15.0, 25.0)
+        }
+    };
+    let min_spacing_m = c.number(
+        fp.key("min_spacing_m"),
+        f.min_spacing_m,
+        1.0,
+        0.0,
+        false,
+        100.0,
+        " m",
+    );
+    let seed = f
+        .seed
+        .unwrap_or_else(|| crate::rng::mix64(survey_seed.wrapping_add(0xF0_2E57 + index as u64)));
+    Some(ForestSpec {
+        area: area?,
+        stems_per_ha: stems,
+        mix,
+        height_range_m: heights,
+        min_spacing_m,
+        seed,
+    })
 }
 
 impl Survey {
@@ -791,6 +1039,58 @@ impl Survey {
                 c.err(mp.key("file"), e.to_string());
             }
         }
+        // [vegetation], [[tree]], [[forest]]
+        let v = &raw.vegetation;
+        let vp = root.key("vegetation");
+        let canopy = CanopyConfig {
+            step_m: c.number(vp.key("step_m"), v.step_m, 0.3, 0.0, true, 10.0, " m"),
+            partial_blocking: c.number(
+                vp.key("partial_blocking"),
+                v.partial_blocking,
+                0.5,
+                0.0,
+                false,
+                10.0,
+                "",
+            ),
+        };
+        let whorl = c.number(
+            vp.key("whorl_spacing_m"),
+            v.whorl_spacing_m,
+            0.3,
+            0.0,
+            true,
+            10.0,
+            " m",
+        );
+        for (i, t) in raw.trees.iter().enumerate() {
+            let tp = root.key("tree").index(i);
+            if let Some(tree) = check_tree(&mut c, &tp, t, seed, i) {
+                scene.add_tree(&tree, whorl, format!("tree[{i}]"));
+            }
+        }
+        let mut forest_trees = Vec::new();
+        if !raw.forests.is_empty() {
+            // Trees stand on the ground (or road, water) below them, else on
+            // any surface, else at z = 0.
+            let ground = crate::accel::Bvh::build(scene.clone());
+            let ground_z = |x: f64, y: f64| {
+                crate::plan::ground_below(&ground, DVec3::new(x, y, 1e6)).max(-1e5)
+            };
+            for (i, f) in raw.forests.iter().enumerate() {
+                let fp = root.key("forest").index(i);
+                let Some(spec) = check_forest(&mut c, &fp, f, seed, i) else {
+                    forest_trees.push(0);
+                    continue;
+                };
+                let trees = generate(&spec, &ground_z);
+                forest_trees.push(trees.len());
+                for (j, tree) in trees.iter().enumerate() {
+                    scene.add_tree(tree, whorl, format!("forest[{i}].tree[{j}]"));
+                }
+            }
+        }
+
         if scene.primitives.is_empty() && c.problems.is_empty() {
             c.err(
                 root,
@@ -833,6 +1133,8 @@ impl Survey {
             sway,
             turn_time_s,
             lines,
+            canopy,
+            forest_trees,
             output: OutputSettings {
                 formats,
                 trajectory_interval_s,

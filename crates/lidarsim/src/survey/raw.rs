@@ -41,6 +41,15 @@ pub struct RawSurvey {
     /// `[[mesh]]`.
     #[serde(default, rename = "mesh", skip_serializing_if = "Vec::is_empty")]
     pub meshes: Vec<RawMesh>,
+    /// `[vegetation]`: how sub-rays march through crowns.
+    #[serde(default)]
+    pub vegetation: RawVegetation,
+    /// `[[tree]]`.
+    #[serde(default, rename = "tree", skip_serializing_if = "Vec::is_empty")]
+    pub trees: Vec<RawTree>,
+    /// `[[forest]]`.
+    #[serde(default, rename = "forest", skip_serializing_if = "Vec::is_empty")]
+    pub forests: Vec<RawForest>,
 }
 
 /// `[scanner]`: the laser, mirror and beam.
@@ -189,4 +198,67 @@ pub struct RawMesh {
     pub class: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
+}
+
+/// `[vegetation]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawVegetation {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub step_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub whorl_spacing_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub partial_blocking: Option<f64>,
+}
+
+/// `[[tree]]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawTree {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub position_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub species: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub dbh_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crown_base_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub foliage_reflectance: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bark_reflectance: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crown_radius_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extinction_per_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub uniform_density: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+}
+
+/// `[[forest]]`: a generated stand.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawForest {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rectangle_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub area_m: Option<Vec<Vec<f64>>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stems_per_ha: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub species: Option<BTreeMap<String, f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub height_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub min_spacing_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
 }

@@ -1,0 +1,198 @@
+//! Generated forest stands: trees placed reproducibly from a seed.
+//!
+//! Stem positions are uniform over the stand's area with a minimum distance
+//! between stems (a hard-core point process, the usual null model of stem
+//! maps), species drawn from the mix, heights uniform in the range, dbh from
+//! the species' height curve and the crown base from its live crown ratio
+//! (±15 %).
+
+use super::tree::{Species, TreeSpec};
+use crate::geometry::DVec3;
+use crate::rng::{Purpose, Stream};
+
+/// A stand to generate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ForestSpec {
+    /// Outline of the stand (x, y), any simple polygon.
+    pub area: Vec<[f64; 2]>,
+    /// Stem density, trees per hectare.
+    pub stems_per_ha: f64,
+    /// Species and their relative weights.
+    pub mix: Vec<(Species, f64)>,
+    /// Smallest and largest tree height, m.
+    pub height_range_m: (f64, f64),
+    /// Smallest distance between two stems, m.
+    pub min_spacing_m: f64,
+    /// Seed of the placement.
+    pub seed: u64,
+}
+
+/// Area of a simple polygon (shoelace formula), m².
+pub fn polygon_area(poly: &[[f64; 2]]) -> f64 {
+    let n = poly.len();
+    (0..n)
+        .map(|i| {
+            let [x0, y0] = poly[i];
+            let [x1, y1] = poly[(i + 1) % n];
+            x0 * y1 - x1 * y0
+        })
+        .sum::<f64>()
+        .abs()
+        * 0.5
+}
+
+/// Even-odd point-in-polygon test in the plane.
+pub fn inside(poly: &[[f64; 2]], x: f64, y: f64) -> bool {
+    let mut c = false;
+    let n = poly.len();
+    let mut j = n - 1;
+    for i in 0..n {
+        let ([xi, yi], [xj, yj]) = (poly[i], poly[j]);
+        if (yi > y) != (yj > y) && x < xi + (y - yi) * (xj - xi) / (yj - yi) {
+            c = !c;
+        }
+        j = i;
+    }
+    c
+}
+
+/// The trees of a stand; `ground_z(x, y)` gives the height of the ground
+/// at a stem. Fewer trees than asked are returned when the minimum spacing
+/// cannot be kept (the caller can compare with the requested count).
+pub fn generate(spec: &ForestSpec, ground_z: &dyn Fn(f64, f64) -> f64) -> Vec<TreeSpec> {
+    let area = polygon_area(&spec.area);
+    let wanted = (area / 10_000.0 * spec.stems_per_ha).round() as usize;
+    let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+    for [x, y] in &spec.area {
+        x0 = x0.min(*x);
+        y0 = y0.min(*y);
+        x1 = x1.max(*x);
+        y1 = y1.max(*y);
+    }
+    let total_weight: f64 = spec.mix.iter().map(|(_, w)| w).sum();
+    let mut rng = Stream::new(spec.seed, 0, 0, Purpose::Forest);
+    // Grid of cells the size of the spacing: neighbours are in the 3×3 block.
+    let cell = spec.min_spacing_m.max(1e-3);
+    let (nx, ny) = (
+        ((x1 - x0) / cell).ceil().max(1.0) as usize,
+        ((y1 - y0) / cell).ceil().max(1.0) as usize,
+    );
+    let use_grid = spec.min_spacing_m > 0.0 && nx.saturating_mul(ny) <= 50_000_000;
+    let mut grid: Vec<Vec<(f64, f64)>> = if use_grid {
+        vec![Vec::new(); nx * ny]
+    } else {
+        Vec::new()
+    };
+    let mut trees = Vec::with_capacity(wanted);
+    let mut attempts = 0usize;
+    while trees.len() < wanted && attempts < 50 * wanted + 1000 {
+        attempts += 1;
+        let x = x0 + rng.uniform() * (x1 - x0);
+        let y = y0 + rng.uniform() * (y1 - y0);
+        if !inside(&spec.area, x, y) {
+            continue;
+        }
+        if use_grid {
+            let (cx, cy) = (
+                (((x - x0) / cell) as usize).min(nx - 1),
+                (((y - y0) / cell) as usize).min(ny - 1),
+            );
+            let mut clear = true;
+            'near: for gx in cx.saturating_sub(1)..=(cx + 1).min(nx - 1) {
+                for gy in cy.saturating_sub(1)..=(cy + 1).min(ny - 1) {
+                    for (px, py) in &grid[gy * nx + gx] {
+                        if (px - x).hypot(py - y) < spec.min_spacing_m {
+                            clear = false;
+                            break 'near;
+                        }
+                    }
+                }
+            }
+            if !clear {
+                continue;
+            }
+            grid[cy * nx + cx].push((x, y));
+        }
+        // Species by weight.
+        let mut pick = rng.uniform() * total_weight;
+        let mut species = spec.mix[0].0;
+        for (s, w) in &spec.mix {
+            species = *s;
+            if pick < *w {
+                break;
+            }
+            pick -= w;
+        }
+        let (h0, h1) = spec.height_range_m;
+        let height = h0 + rng.uniform() * (h1 - h0);
+        let preset = species.preset();
+        // Heights beyond the height curve's reach (it levels off at A) get
+        // the dbh of a tree at 95 % of A.
+        let dbh = species
+            .dbh_from_height_m(height.min(0.95 * preset.height_a_m))
+            .unwrap_or(0.5);
+        let ratio = preset.crown_ratio * (0.85 + 0.3 * rng.uniform());
+        let crown_base = height * (1.0 - ratio.min(0.95));
+        let mut tree = TreeSpec::new(
+            DVec3::new(x, y, ground_z(x, y)),
+            species,
+            dbh,
+            height,
+            crown_base,
+        );
+        tree.seed = rng.next_u64();
+        trees.push(tree);
+    }
+    trees
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stand(seed: u64) -> ForestSpec {
+        ForestSpec {
+            area: vec![[0.0, 0.0], [100.0, 0.0], [100.0, 50.0], [0.0, 50.0]],
+            stems_per_ha: 800.0,
+            mix: vec![(Species::Pine, 0.7), (Species::Birch, 0.3)],
+            height_range_m: (12.0, 22.0),
+            min_spacing_m: 1.5,
+            seed,
+        }
+    }
+
+    #[test]
+    fn density_mix_spacing_and_reproducibility() {
+        let trees = generate(&stand(4), &|_, _| 2.0);
+        assert_eq!(trees.len(), 400); // 0.5 ha × 800 /ha
+        assert_eq!(trees, generate(&stand(4), &|_, _| 2.0));
+        assert_ne!(trees, generate(&stand(5), &|_, _| 2.0));
+        let pines = trees.iter().filter(|t| t.species == Species::Pine).count() as f64;
+        assert!((pines / 400.0 - 0.7).abs() < 0.08);
+        for (i, a) in trees.iter().enumerate() {
+            assert!(inside(&stand(4).area, a.base_m.x, a.base_m.y));
+            assert_eq!(a.base_m.z, 2.0);
+            assert!((12.0..22.0).contains(&a.height_m));
+            assert!(a.crown_base_m > 0.0 && a.crown_base_m < a.height_m);
+            assert!(a.dbh_m > 0.05 && a.dbh_m < 0.8);
+            for b in &trees[i + 1..] {
+                let d = (a.base_m.x - b.base_m.x).hypot(a.base_m.y - b.base_m.y);
+                assert!(d >= 1.5);
+            }
+        }
+    }
+
+    #[test]
+    fn polygon_area_and_inside() {
+        let l = [
+            [0.0, 0.0],
+            [4.0, 0.0],
+            [4.0, 1.0],
+            [1.0, 1.0],
+            [1.0, 3.0],
+            [0.0, 3.0],
+        ];
+        assert!((polygon_area(&l) - 6.0).abs() < 1e-12);
+        assert!(inside(&l, 0.5, 2.0) && !inside(&l, 2.0, 2.0));
+    }
+}

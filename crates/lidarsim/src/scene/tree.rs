@@ -1,0 +1,589 @@
+//! Trees: a conical trunk and a volumetric crown (specification, "LiDAR
+//! pulse in vegetation").
+//!
+//! A tree is described by its stem base, species, dbh, height and
+//! crown-base height. It becomes two scene primitives: an opaque
+//! [`Trunk`] (a cone, "the stem is a cone (c==1)") and a [`Crown`], the
+//! envelope `r(χ) = a + b·χ^c` (specification Eq. 4, χ = 0 at the top and 1
+//! at the crown base) filled with a foliage density
+//! `thetafactor × heightfactor × radiusfactor` (specification, Fig. 15 and
+//! the three factors that follow it). Sub-rays march through crowns and are
+//! intercepted by a lottery (see [`crate::canopy`]).
+
+use crate::geometry::{Aabb, DVec3, Ray};
+
+/// Height at which dbh is measured, m.
+pub const BREAST_HEIGHT_M: f64 = 1.3;
+
+/// Tree species with presets for crown shape and allometry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Species {
+    /// Scots pine, *Pinus sylvestris*.
+    Pine,
+    /// Norway spruce, *Picea abies*.
+    Spruce,
+    /// Silver birch, *Betula pendula* (in leaf).
+    Birch,
+}
+
+/// Species parameters; the numbers and their sources are in
+/// `docs/trees.md`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SpeciesPreset {
+    /// Crown shape exponent `c` of Eq. 4.
+    pub shape_c: f64,
+    /// Flat-top constant `a` of Eq. 4 as a fraction of the crown radius.
+    pub flat_top_fraction: f64,
+    /// Crown radius allometry of forest-grown trees (Jakobsons 1970):
+    /// `a + b = r0 + r1 · dbh_cm`, m.
+    pub crown_r0_m: f64,
+    /// Slope of the crown radius allometry, m per cm of dbh.
+    pub crown_r1_m_per_cm: f64,
+    /// Interception coefficient `k` of `1 − exp(−k·ρ·Δs)`, 1/m.
+    pub extinction_per_m: f64,
+    /// Foliage reflectance at 1064 nm.
+    pub foliage_reflectance: f64,
+    /// Bark reflectance at 1064 nm.
+    pub bark_reflectance: f64,
+    /// Height curve of Pukkala, Lähde & Laiho (2009):
+    /// `h = A / (1 + b1/d + b2/d²)`, d in cm, h in m.
+    pub height_a_m: f64,
+    /// `b1` of the height curve, cm.
+    pub height_b1: f64,
+    /// `b2` of the height curve, cm².
+    pub height_b2: f64,
+    /// Typical live crown ratio (crown length / height).
+    pub crown_ratio: f64,
+}
+
+impl Species {
+    /// All species with their names in survey files.
+    pub const ALL: [(&'static str, Species); 3] = [
+        ("pine", Species::Pine),
+        ("spruce", Species::Spruce),
+        ("birch", Species::Birch),
+    ];
+
+    /// Parses a species name (also the Latin binomial and common aliases).
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name.trim().to_ascii_lowercase().as_str() {
+            "pine" | "scots pine" | "scots_pine" | "pinus sylvestris" => Some(Species::Pine),
+            "spruce" | "norway spruce" | "norway_spruce" | "picea abies" => Some(Species::Spruce),
+            "birch" | "silver birch" | "silver_birch" | "betula pendula" => Some(Species::Birch),
+            _ => None,
+        }
+    }
+
+    /// The name used in survey files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Species::Pine => "pine",
+            Species::Spruce => "spruce",
+            Species::Birch => "birch",
+        }
+    }
+
+    /// The preset of this species (sources in `docs/trees.md`).
+    pub fn preset(self) -> SpeciesPreset {
+        match self {
+            Species::Pine => SpeciesPreset {
+                shape_c: 0.6,
+                flat_top_fraction: 0.1,
+                crown_r0_m: 0.519,
+                crown_r1_m_per_cm: 0.0744,
+                extinction_per_m: 1.8,
+                foliage_reflectance: 0.42,
+                bark_reflectance: 0.35,
+                height_a_m: 32.694,
+                height_b1: 19.260,
+                height_b2: 31.721,
+                crown_ratio: 0.43,
+            },
+            Species::Spruce => SpeciesPreset {
+                shape_c: 0.9,
+                flat_top_fraction: 0.02,
+                crown_r0_m: 0.761,
+                crown_r1_m_per_cm: 0.060,
+                extinction_per_m: 2.8,
+                foliage_reflectance: 0.40,
+                bark_reflectance: 0.30,
+                height_a_m: 39.691,
+                height_b1: 25.683,
+                height_b2: 37.785,
+                crown_ratio: 0.70,
+            },
+            Species::Birch => SpeciesPreset {
+                shape_c: 0.5,
+                flat_top_fraction: 0.1,
+                crown_r0_m: 0.750,
+                crown_r1_m_per_cm: 0.0875,
+                extinction_per_m: 2.5,
+                foliage_reflectance: 0.48,
+                bark_reflectance: 0.50,
+                height_a_m: 37.089,
+                height_b1: 22.640,
+                height_b2: -8.0,
+                crown_ratio: 0.52,
+            },
+        }
+    }
+
+    /// Maximum crown radius (m) of a tree of this species with the given dbh.
+    pub fn crown_radius_m(self, dbh_m: f64) -> f64 {
+        let p = self.preset();
+        p.crown_r0_m + p.crown_r1_m_per_cm * dbh_m * 100.0
+    }
+
+    /// Height (m) of a tree with the given dbh from the height curve.
+    pub fn height_from_dbh_m(self, dbh_m: f64) -> f64 {
+        let p = self.preset();
+        let d = dbh_m * 100.0;
+        p.height_a_m / (1.0 + p.height_b1 / d + p.height_b2 / (d * d))
+    }
+
+    /// dbh (m) of a tree of the given height: the height curve inverted by
+    /// bisection over 1–250 cm (it increases with d there). Heights the curve
+    /// does not reach in that range (it levels off at `A`) give `None`.
+    pub fn dbh_from_height_m(self, height_m: f64) -> Option<f64> {
+        let (mut lo, mut hi) = (0.01, 2.5);
+        if height_m < self.height_from_dbh_m(lo) || height_m > self.height_from_dbh_m(hi) {
+            return None;
+        }
+        for _ in 0..80 {
+            let mid = 0.5 * (lo + hi);
+            if self.height_from_dbh_m(mid) < height_m {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        Some(0.5 * (lo + hi))
+    }
+}
+
+/// A tree as described in a survey.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TreeSpec {
+    /// Stem base (ground level at the stem), m.
+    pub base_m: DVec3,
+    /// Species.
+    pub species: Species,
+    /// Diameter at breast height (1.3 m), m.
+    pub dbh_m: f64,
+    /// Tree height, m.
+    pub height_m: f64,
+    /// Height of the base of the living crown above the stem base, m.
+    pub crown_base_m: f64,
+    /// Foliage reflectance (default: species preset).
+    pub foliage_reflectance: f64,
+    /// Bark reflectance (default: species preset).
+    pub bark_reflectance: f64,
+    /// Maximum crown radius `a + b`, m (default: species allometry).
+    pub crown_radius_m: f64,
+    /// Interception coefficient `k`, 1/m (default: species preset).
+    pub extinction_per_m: f64,
+    /// When set, a constant relative foliage density inside the envelope
+    /// replaces the three-factor model (for tests and simple crowns).
+    pub uniform_density: Option<f64>,
+    /// Seed of the whorl rotation of this tree.
+    pub seed: u64,
+}
+
+impl TreeSpec {
+    /// A tree with species defaults for everything not given.
+    pub fn new(
+        base_m: DVec3,
+        species: Species,
+        dbh_m: f64,
+        height_m: f64,
+        crown_base_m: f64,
+    ) -> Self {
+        let p = species.preset();
+        Self {
+            base_m,
+            species,
+            dbh_m,
+            height_m,
+            crown_base_m,
+            foliage_reflectance: p.foliage_reflectance,
+            bark_reflectance: p.bark_reflectance,
+            crown_radius_m: species.crown_radius_m(dbh_m),
+            extinction_per_m: p.extinction_per_m,
+            uniform_density: None,
+            seed: 0,
+        }
+    }
+
+    /// The trunk cone.
+    pub fn trunk(&self) -> Trunk {
+        Trunk::new(self.base_m, self.dbh_m, self.height_m)
+    }
+
+    /// The crown.
+    pub fn crown(&self, whorl_spacing_m: f64) -> Crown {
+        let p = self.species.preset();
+        let a = p.flat_top_fraction * self.crown_radius_m;
+        let golden = std::f64::consts::PI * (3.0 - 5.0f64.sqrt());
+        Crown {
+            axis_x: self.base_m.x,
+            axis_y: self.base_m.y,
+            z_top: self.base_m.z + self.height_m,
+            z_base: self.base_m.z + self.crown_base_m,
+            a,
+            b: self.crown_radius_m - a,
+            c: p.shape_c,
+            extinction_per_m: self.extinction_per_m,
+            whorl_spacing_m,
+            whorl_phase: (crate::rng::mix64(self.seed) >> 11) as f64 / (1u64 << 53) as f64
+                * std::f64::consts::TAU,
+            whorl_step: golden,
+            uniform_density: self.uniform_density,
+        }
+    }
+}
+
+/// The stem: a cone with its apex at the tree top and radius
+/// `dbh/2 · (H − h)/(H − 1.3)` at height `h` above the base (so the radius is
+/// dbh/2 at breast height and "slightly (linearly) larger" at the base).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trunk {
+    axis_x: f64,
+    axis_y: f64,
+    z_base: f64,
+    z_top: f64,
+    /// Radius per metre below the top.
+    slope: f64,
+}
+
+impl Trunk {
+    /// The trunk of a tree of height `height_m` and dbh `dbh_m` at `base_m`.
+    pub fn new(base_m: DVec3, dbh_m: f64, height_m: f64) -> Self {
+        Self {
+            axis_x: base_m.x,
+            axis_y: base_m.y,
+            z_base: base_m.z,
+            z_top: base_m.z + height_m,
+            slope: 0.5 * dbh_m / (height_m - BREAST_HEIGHT_M),
+        }
+    }
+
+    /// Radius at world height `z`, m (0 outside the stem).
+    pub fn radius_at(&self, z: f64) -> f64 {
+        if z < self.z_base || z > self.z_top {
+            0.0
+        } else {
+            self.slope * (self.z_top - z)
+        }
+    }
+
+    /// Bounding box.
+    pub fn bounds(&self) -> Aabb {
+        let r = self.radius_at(self.z_base);
+        Aabb {
+            min: DVec3::new(self.axis_x - r, self.axis_y - r, self.z_base),
+            max: DVec3::new(self.axis_x + r, self.axis_y + r, self.z_top),
+        }
+    }
+
+    /// Outward unit normal of the cone's side at the point `p`.
+    pub fn normal_at(&self, p: DVec3) -> DVec3 {
+        DVec3::new(
+            p.x - self.axis_x,
+            p.y - self.axis_y,
+            self.slope * self.slope * (self.z_top - p.z),
+        )
+        .normalize_or(DVec3::Z)
+    }
+
+    /// First intersection with the cone's side within `(t_min, t_max)` and
+    /// the outward normal there.
+    pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+        // (x−x0)² + (y−y0)² = m² (z_top − z)², z_base ≤ z ≤ z_top.
+        let m2 = self.slope * self.slope;
+        let o = ray.origin - DVec3::new(self.axis_x, self.axis_y, self.z_top);
+        let d = ray.dir;
+        let a = d.x * d.x + d.y * d.y - m2 * d.z * d.z;
+        let b = 2.0 * (o.x * d.x + o.y * d.y - m2 * o.z * d.z);
+        let c = o.x * o.x + o.y * o.y - m2 * o.z * o.z;
+        let roots: [f64; 2] = if a.abs() < 1e-15 {
+            if b.abs() < 1e-15 {
+                return None;
+            }
+            [-c / b, f64::NAN]
+        } else {
+            let disc = b * b - 4.0 * a * c;
+            if disc < 0.0 {
+                return None;
+            }
+            let sq = disc.sqrt();
+            // Numerically stable pair of roots.
+            let q = -0.5 * (b + b.signum() * sq);
+            let (r1, r2) = (q / a, if q != 0.0 { c / q } else { f64::NAN });
+            if r1 <= r2 { [r1, r2] } else { [r2, r1] }
+        };
+        for t in roots {
+            if !(t > t_min && t < t_max) {
+                continue;
+            }
+            let p = ray.at(t);
+            // The cone equation also holds on the mirrored cone above the
+            // apex: keep the stem part.
+            if p.z < self.z_base || p.z > self.z_top {
+                continue;
+            }
+            return Some((t, self.normal_at(p)));
+        }
+        None
+    }
+}
+
+/// A crown envelope with its foliage density field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Crown {
+    axis_x: f64,
+    axis_y: f64,
+    z_top: f64,
+    z_base: f64,
+    a: f64,
+    b: f64,
+    c: f64,
+    /// Interception coefficient `k`, 1/m.
+    pub extinction_per_m: f64,
+    whorl_spacing_m: f64,
+    whorl_phase: f64,
+    whorl_step: f64,
+    uniform_density: Option<f64>,
+}
+
+impl Crown {
+    /// Envelope radius at relative crown depth χ (Eq. 4).
+    #[inline]
+    pub fn radius_at_chi(&self, chi: f64) -> f64 {
+        self.a + self.b * chi.powf(self.c)
+    }
+
+    /// Largest radius of the envelope, `a + b`, m.
+    pub fn max_radius_m(&self) -> f64 {
+        self.a + self.b
+    }
+
+    /// Top and bottom of the crown, world z.
+    pub fn z_range(&self) -> (f64, f64) {
+        (self.z_base, self.z_top)
+    }
+
+    /// Horizontal position of the stem axis.
+    pub fn axis(&self) -> (f64, f64) {
+        (self.axis_x, self.axis_y)
+    }
+
+    /// Bounding box (a vertical cylinder's).
+    pub fn bounds(&self) -> Aabb {
+        let r = self.max_radius_m();
+        Aabb {
+            min: DVec3::new(self.axis_x - r, self.axis_y - r, self.z_base),
+            max: DVec3::new(self.axis_x + r, self.axis_y + r, self.z_top),
+        }
+    }
+
+    /// Whether `p` lies inside the envelope: its horizontal distance to the
+    /// stem is at most `r(χ)` at its height (specification Fig. 16).
+    pub fn contains(&self, p: DVec3) -> bool {
+        self.coordinates(p).is_some()
+    }
+
+    /// The crown coordinates `(χ, rc, φ)` of a point inside the envelope
+    /// ("A point inside the envelope will be defined by coordinates
+    /// (χ, rc, φ)").
+    pub fn coordinates(&self, p: DVec3) -> Option<(f64, f64, f64)> {
+        if p.z > self.z_top || p.z < self.z_base {
+            return None;
+        }
+        let chi = (self.z_top - p.z) / (self.z_top - self.z_base);
+        let (dx, dy) = (p.x - self.axis_x, p.y - self.axis_y);
+        let d = dx.hypot(dy);
+        let r = self.radius_at_chi(chi);
+        (d <= r).then(|| (chi, if r > 0.0 { d / r } else { 0.0 }, dy.atan2(dx)))
+    }
+
+    /// Relative foliage density (0–1) at `p`, 0 outside the envelope:
+    /// thetafactor `|cos(6φ + f)|` with `f` rotated every whorl,
+    /// heightfactor 1 down to χ = 0.5 then falling linearly to 0 at χ = 1
+    /// (the specification writes "1−2χ", which is not continuous at 0.5;
+    /// `2(1 − χ)` is the line it describes), radiusfactor `1 − rc`.
+    pub fn density_at(&self, p: DVec3) -> f64 {
+        let Some((chi, rc, phi)) = self.coordinates(p) else {
+            return 0.0;
+        };
+        if let Some(rho) = self.uniform_density {
+            return rho;
+        }
+        let whorl = ((self.z_top - p.z) / self.whorl_spacing_m).floor();
+        let f = self.whorl_phase + whorl * self.whorl_step;
+        let theta = (6.0 * phi + f).cos().abs();
+        let height = if chi <= 0.5 { 1.0 } else { 2.0 * (1.0 - chi) };
+        theta * height * (1.0 - rc)
+    }
+
+    /// The interval of `ray` inside the crown's bounding cylinder, within
+    /// `(t_min, t_max)`.
+    pub fn span(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
+        let r = self.max_radius_m();
+        let (ox, oy) = (ray.origin.x - self.axis_x, ray.origin.y - self.axis_y);
+        let (dx, dy) = (ray.dir.x, ray.dir.y);
+        let (mut t0, mut t1) = (t_min, t_max);
+        // Side of the cylinder.
+        let a = dx * dx + dy * dy;
+        if a < 1e-18 {
+            if ox * ox + oy * oy > r * r {
+                return None;
+            }
+        } else {
+            let b = ox * dx + oy * dy;
+            let c = ox * ox + oy * oy - r * r;
+            let disc = b * b - a * c;
+            if disc < 0.0 {
+                return None;
+            }
+            let sq = disc.sqrt();
+            t0 = t0.max((-b - sq) / a);
+            t1 = t1.min((-b + sq) / a);
+        }
+        // Caps.
+        if ray.dir.z.abs() < 1e-18 {
+            if ray.origin.z < self.z_base || ray.origin.z > self.z_top {
+                return None;
+            }
+        } else {
+            let ta = (self.z_base - ray.origin.z) / ray.dir.z;
+            let tb = (self.z_top - ray.origin.z) / ray.dir.z;
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+        }
+        (t0 < t1).then_some((t0, t1))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pine() -> TreeSpec {
+        TreeSpec::new(DVec3::new(10.0, 20.0, 5.0), Species::Pine, 0.25, 18.0, 8.0)
+    }
+
+    #[test]
+    fn envelope_follows_equation_4() {
+        let crown = pine().crown(0.3);
+        let (zb, zt) = crown.z_range();
+        assert_eq!((zb, zt), (13.0, 23.0));
+        for chi in [0.0, 0.25, 0.5, 0.9, 1.0] {
+            let r = crown.radius_at_chi(chi);
+            let want = crown.a + crown.b * chi.powf(crown.c);
+            assert!((r - want).abs() < 1e-12);
+            let z = zt - chi * (zt - zb);
+            // Just inside and just outside the envelope at that height.
+            assert!(crown.contains(DVec3::new(10.0 + r - 1e-6, 20.0, z)));
+            assert!(!crown.contains(DVec3::new(10.0, 20.0 + r + 1e-6, z)));
+        }
+        assert!((crown.max_radius_m() - Species::Pine.crown_radius_m(0.25)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn density_factors() {
+        let crown = pine().crown(0.3);
+        let (zb, zt) = crown.z_range();
+        // On the stem axis rc = 0 and φ = 0.
+        let at = |chi: f64, rc: f64, phi: f64| {
+            let z = zt - chi * (zt - zb);
+            let r = crown.radius_at_chi(chi) * rc;
+            crown.density_at(DVec3::new(10.0 + r * phi.cos(), 20.0 + r * phi.sin(), z))
+        };
+        // Six branches per whorl: density repeats every 60°.
+        for phi in [0.1, 0.7, 2.0] {
+            let d1 = at(0.3, 0.4, phi);
+            let d2 = at(0.3, 0.4, phi + std::f64::consts::PI / 3.0);
+            assert!((d1 - d2).abs() < 1e-9);
+        }
+        // Height factor: flat to χ = 0.5, then linear to 0 at χ = 1 —
+        // compare the best branch direction at each height.
+        let best = |chi: f64| {
+            (0..3600)
+                .map(|i| at(chi, 0.5, i as f64 * 0.1f64.to_radians()))
+                .fold(0.0, f64::max)
+        };
+        assert!((best(0.2) - 0.5).abs() < 1e-3);
+        assert!((best(0.45) - 0.5).abs() < 1e-3);
+        assert!((best(0.75) - 0.25).abs() < 1e-3);
+        // Radius factor 1 − rc.
+        let b = |rc: f64| {
+            (0..3600)
+                .map(|i| at(0.3, rc, i as f64 * 0.1f64.to_radians()))
+                .fold(0.0, f64::max)
+        };
+        assert!((b(0.001) - 0.999).abs() < 1e-3 && (b(0.8) - 0.2).abs() < 1e-3);
+        // The whorl pattern rotates between whorls 0.3 m apart.
+        let z1 = zt - 1.0;
+        let z2 = z1 - 0.3;
+        let p = |z: f64| crown.density_at(DVec3::new(10.5, 20.2, z));
+        assert!((p(z1) - p(z2)).abs() > 1e-6);
+    }
+
+    #[test]
+    fn trunk_cone_radius_and_intersection() {
+        let t = pine().trunk();
+        assert!((t.radius_at(5.0 + 1.3) - 0.125).abs() < 1e-12);
+        assert!(t.radius_at(5.0) > 0.125);
+        assert_eq!(t.radius_at(23.0), 0.0);
+        // A horizontal ray at breast height hits the stem at dbh/2.
+        let ray = Ray::new(DVec3::new(0.0, 20.0, 6.3), DVec3::X);
+        let (d, n) = t.intersect(&ray, 0.0, 100.0).unwrap();
+        assert!((d - (10.0 - 0.125)).abs() < 1e-9);
+        assert!(n.x < -0.99);
+        // A vertical ray beside the stem misses it; one onto the axis hits
+        // the apex region.
+        let miss = Ray::new(DVec3::new(10.3, 20.0, 50.0), -DVec3::Z);
+        assert!(t.intersect(&miss, 0.0, 100.0).is_none());
+        let down = Ray::new(DVec3::new(10.05, 20.0, 50.0), -DVec3::Z);
+        let (d, _) = t.intersect(&down, 0.0, 100.0).unwrap();
+        let z = 50.0 - d;
+        assert!((t.radius_at(z) - 0.05).abs() < 1e-9);
+    }
+
+    #[test]
+    fn crown_span_is_the_cylinder_interval() {
+        let crown = pine().crown(0.3);
+        let r = crown.max_radius_m();
+        let ray = Ray::new(DVec3::new(10.0, 20.0, 100.0), -DVec3::Z);
+        let (a, b) = crown.span(&ray, 0.0, 1e9).unwrap();
+        assert!((a - 77.0).abs() < 1e-9 && (b - 87.0).abs() < 1e-9);
+        let side = Ray::new(DVec3::new(-50.0, 20.0, 15.0), DVec3::X);
+        let (a, b) = crown.span(&side, 0.0, 1e9).unwrap();
+        assert!((a - (60.0 - r)).abs() < 1e-9 && (b - (60.0 + r)).abs() < 1e-9);
+        let off = Ray::new(DVec3::new(10.0 + r + 0.1, 20.0, 100.0), -DVec3::Z);
+        assert!(crown.span(&off, 0.0, 1e9).is_none());
+    }
+
+    #[test]
+    fn allometry_matches_the_published_values() {
+        // Jakobsons (1970) forest-grown crown radii at dbh 20 and 40 cm, and
+        // Pukkala et al. (2009) heights, as tabulated in docs/trees.md.
+        let cases = [
+            (Species::Pine, 2.007, 3.495, 16.0, 21.8),
+            (Species::Spruce, 1.961, 3.161, 16.7, 23.8),
+            (Species::Birch, 2.500, 4.250, 17.6, 23.8),
+        ];
+        for (s, r20, r40, h20, h40) in cases {
+            assert!((s.crown_radius_m(0.2) - r20).abs() < 0.01, "{s:?}");
+            assert!((s.crown_radius_m(0.4) - r40).abs() < 0.01, "{s:?}");
+            assert!((s.height_from_dbh_m(0.2) - h20).abs() < 0.1, "{s:?}");
+            assert!((s.height_from_dbh_m(0.4) - h40).abs() < 0.1, "{s:?}");
+            for d in [0.1, 0.2, 0.35] {
+                let back = s.dbh_from_height_m(s.height_from_dbh_m(d)).unwrap();
+                assert!((back - d).abs() < 1e-9, "{s:?} {d} {back}");
+            }
+        }
+        assert!(Species::Pine.dbh_from_height_m(40.0).is_none());
+    }
+}
