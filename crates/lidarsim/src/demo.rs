@@ -1,17 +1,20 @@
-//! The built-in demo: a small town block flown by two overlapping lines.
+//! The built-in demo: a small town block and a forest stand beside it,
+//! flown by three overlapping lines.
 //!
-//! The scene is a 300 m × 300 m block: a north–south street and an
-//! east–west street (asphalt), four lawns, and eight houses with walls and
+//! The town is a 300 m × 300 m block: a north–south street and an
+//! east–west street (asphalt), four lawns, eight houses with walls and
 //! roofs — gabled roofs (pentagonal gable walls), a hipped roof (trapezoids
-//! and triangles) and two flat roofs. It is built as a [`RawSurvey`], the
+//! and triangles) and two flat roofs — and street and garden trees. East of
+//! it lies a 120 m × 300 m mixed stand of pine, spruce and birch generated
+//! by a `[[forest]]` entry. It is built as a [`RawSurvey`], the
 //! same form a survey file takes, so `lidarsim demo --export-survey FILE`
 //! writes a survey file that reproduces the demo exactly.
 
 use std::collections::BTreeMap;
 
 use crate::survey::raw::{
-    RawFlightLine, RawMaterial, RawOutput, RawPlatform, RawPolygon, RawReceiver, RawScanner,
-    RawSurvey,
+    RawFlightLine, RawForest, RawMaterial, RawOutput, RawPlatform, RawPolygon, RawReceiver,
+    RawScanner, RawSurvey, RawTree,
 };
 
 /// Half the side of the block, m.
@@ -223,6 +226,45 @@ pub fn demo_survey() -> RawSurvey {
         house(&mut polygons, x0, x1, y0, y1, eaves, roof);
     }
 
+    // The forest floor east of the block.
+    polygons.push(rect_xy("litter", "ground", h, h + 120.0, -h, h));
+    materials.insert("litter".to_string(), material(0.25, 1.0));
+
+    // Birches along the north–south street, pines and spruces in gardens.
+    let tree = |x: f64, y: f64, species: &str, dbh: f64, height: f64, crown_base: f64| RawTree {
+        position_m: Some(vec![x, y, 0.0]),
+        species: Some(species.to_string()),
+        dbh_m: Some(dbh),
+        height_m: Some(height),
+        crown_base_m: Some(crown_base),
+        ..Default::default()
+    };
+    let mut trees = Vec::new();
+    for k in 0..8 {
+        let y = -130.0 + 20.0 * k as f64 + if k >= 4 { 20.0 } else { 0.0 };
+        let side = if k % 2 == 0 { -9.0 } else { 9.0 };
+        trees.push(tree(side, y, "birch", 0.22, 13.0, 4.0));
+    }
+    trees.push(tree(-80.0, -100.0, "pine", 0.35, 17.0, 8.0));
+    trees.push(tree(-25.0, -110.0, "spruce", 0.3, 15.0, 2.0));
+    trees.push(tree(60.0, -110.0, "pine", 0.28, 14.0, 7.0));
+    trees.push(tree(120.0, 10.0, "birch", 0.3, 16.0, 5.0));
+    trees.push(tree(-100.0, 30.0, "spruce", 0.25, 13.0, 1.5));
+    trees.push(tree(60.0, 60.0, "pine", 0.32, 16.0, 8.0));
+    let forest = RawForest {
+        rectangle_m: Some(vec![h + 2.0, -h + 2.0, h + 118.0, h - 2.0]),
+        stems_per_ha: Some(500.0),
+        species: Some(BTreeMap::from([
+            ("pine".to_string(), 0.5),
+            ("spruce".to_string(), 0.3),
+            ("birch".to_string(), 0.2),
+        ])),
+        height_m: Some(vec![14.0, 24.0]),
+        min_spacing_m: Some(2.0),
+        seed: Some(11),
+        area_m: None,
+    };
+
     let line = |x: f64, y0: f64, y1: f64| RawFlightLine {
         start_m: Some(vec![x, y0, 400.0]),
         end_m: Some(vec![x, y1, 400.0]),
@@ -261,10 +303,16 @@ pub fn demo_survey() -> RawSurvey {
             formats: Some(vec!["las".into(), "xyz".into()]),
             ..Default::default()
         },
-        flight_lines: vec![line(-40.0, -150.0, 150.0), line(40.0, 150.0, -150.0)],
+        flight_lines: vec![
+            line(-40.0, -150.0, 150.0),
+            line(40.0, 150.0, -150.0),
+            line(180.0, -150.0, 150.0),
+        ],
         materials,
         polygons,
         meshes: Vec::new(),
+        trees,
+        forests: vec![forest],
         ..Default::default()
     }
 }
