@@ -1,5 +1,5 @@
-//! Throughput benchmark: pulses per second on the demo scene and on a flat
-//! plane, for 1 and 2 worker threads.
+//! Throughput benchmark: pulses per second on the demo scene, on a flat
+//! plane and over forests of 100 and 10 000 trees, for 1 and 2 threads.
 //!
 //! Run with `cargo bench -p lidarsim --bench throughput`. Each case runs
 //! once to warm up, then `REPEATS` times; the median is reported, with the
@@ -57,6 +57,51 @@ vertices_m = [[-200, -200, 0], [200, -200, 0], [200, 200, 0], [-200, 200, 0]]
     Survey::from_toml(text, None).expect("flat survey")
 }
 
+/// A stand of `trees` trees at 500 stems/ha (its area grows with the
+/// count), flown by the same 40 m line with a narrow scan whose 52 m swath
+/// lies inside the stand: every pulse meets the same density of crowns,
+/// only the number of trees in the scene differs.
+fn forest(trees: usize) -> Survey {
+    let area_m2 = trees as f64 / 500.0 * 10_000.0;
+    // Keep the stand's 5:4 aspect (50 m × 40 m for 100 trees).
+    let w = (area_m2 * 1.25).sqrt();
+    let h = area_m2 / w;
+    let text = format!(
+        r#"
+seed = 1
+[scanner]
+prf_hz = 100000
+scan_frequency_hz = 50
+scan_angle_deg = 5
+subrays = 19
+[[flight_line]]
+start_m = [0.0, -20.0, 300.0]
+end_m = [0.0, 20.0, 300.0]
+speed_mps = 20.0
+[materials.ground]
+reflectance = 0.25
+[[polygon]]
+material = "ground"
+class = "ground"
+vertices_m = [[-{gw}, -{gh}, 0], [{gw}, -{gh}, 0], [{gw}, {gh}, 0], [-{gw}, {gh}, 0]]
+[[forest]]
+rectangle_m = [-{hw}, -{hh}, {hw}, {hh}]
+stems_per_ha = 500
+species = {{ pine = 0.5, spruce = 0.3, birch = 0.2 }}
+height_m = [14.0, 24.0]
+min_spacing_m = 2.0
+seed = 3
+"#,
+        hw = w / 2.0,
+        hh = h / 2.0,
+        gw = w / 2.0 + 50.0,
+        gh = h / 2.0 + 50.0,
+    );
+    let s = Survey::from_toml(&text, None).expect("forest survey");
+    assert_eq!(s.forest_trees, [trees]);
+    s
+}
+
 fn demo() -> Survey {
     Survey::from_raw(lidarsim::demo::demo_survey(), None).expect("demo survey")
 }
@@ -95,9 +140,12 @@ fn main() {
     // `cargo bench` passes `--bench`; ignore arguments.
     let flat = flat_plane();
     let demo = demo();
+    let (f100, f10k) = (forest(100), forest(10_000));
     for threads in [1, 2] {
         bench("flat", &flat, threads);
         bench("demo", &demo, threads);
+        bench("forest100", &f100, threads);
+        bench("forest10000", &f10k, threads);
     }
     // Whole run with LAS + XYZ output, 2 threads.
     let dir = std::env::temp_dir().join(format!("lidarsim-bench-{}", std::process::id()));

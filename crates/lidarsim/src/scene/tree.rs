@@ -360,7 +360,14 @@ impl Crown {
     /// Envelope radius at relative crown depth χ (Eq. 4).
     #[inline]
     pub fn radius_at_chi(&self, chi: f64) -> f64 {
-        self.a + self.b * chi.powf(self.c)
+        let shape = if self.c == 1.0 {
+            chi
+        } else if self.c == 0.5 {
+            chi.sqrt()
+        } else {
+            chi.powf(self.c)
+        };
+        self.a + self.b * shape
     }
 
     /// Largest radius of the envelope, `a + b`, m.
@@ -413,15 +420,30 @@ impl Crown {
     /// (the specification writes "1−2χ", which is not continuous at 0.5;
     /// `2(1 − χ)` is the line it describes), radiusfactor `1 − rc`.
     pub fn density_at(&self, p: DVec3) -> f64 {
-        let Some((chi, rc, phi)) = self.coordinates(p) else {
+        if p.z > self.z_top || p.z < self.z_base {
             return 0.0;
-        };
+        }
+        let chi = (self.z_top - p.z) / (self.z_top - self.z_base);
+        let (dx, dy) = (p.x - self.axis_x, p.y - self.axis_y);
+        let d2 = dx * dx + dy * dy;
+        let r = self.radius_at_chi(chi);
+        if d2 > r * r {
+            return 0.0;
+        }
         if let Some(rho) = self.uniform_density {
             return rho;
         }
+        let d = d2.sqrt();
+        let rc = if r > 0.0 { d / r } else { 0.0 };
+        // cos(6φ + f) without trigonometry of φ: (cos φ + i sin φ)⁶ by
+        // complex squaring and multiplication.
+        let (c1, s1) = if d > 0.0 { (dx / d, dy / d) } else { (1.0, 0.0) };
+        let (c2, s2) = (c1 * c1 - s1 * s1, 2.0 * c1 * s1);
+        let (c3, s3) = (c2 * c1 - s2 * s1, c2 * s1 + s2 * c1);
+        let (c6, s6) = (c3 * c3 - s3 * s3, 2.0 * c3 * s3);
         let whorl = ((self.z_top - p.z) / self.whorl_spacing_m).floor();
-        let f = self.whorl_phase + whorl * self.whorl_step;
-        let theta = (6.0 * phi + f).cos().abs();
+        let (sf, cf) = (self.whorl_phase + whorl * self.whorl_step).sin_cos();
+        let theta = (c6 * cf - s6 * sf).abs();
         let height = if chi <= 0.5 { 1.0 } else { 2.0 * (1.0 - chi) };
         theta * height * (1.0 - rc)
     }
