@@ -73,7 +73,10 @@ fn main() -> ExitCode {
             seed,
             export_survey,
         } => {
-            let raw = lidarsim::demo::demo_survey();
+            let mut raw = lidarsim::demo::demo_survey();
+            if seed.is_some() {
+                raw.seed = seed;
+            }
             if let Some(path) = export_survey {
                 let text = match toml::to_string(&raw) {
                     Ok(t) => t,
@@ -94,19 +97,20 @@ fn main() -> ExitCode {
                     return fail(1, &list.join("\n"));
                 }
             };
-            simulate(survey, &output, threads, seed)
+            simulate(survey, &output, threads)
         }
         Command::Run {
             survey,
             output,
             threads,
             seed,
-        } => match Survey::load(&survey) {
-            Ok(s) => simulate(s, &output, threads, seed),
+        } => match Survey::load_with_seed(&survey, seed) {
+            Ok(s) => simulate(s, &output, threads),
             Err(e) => fail_survey(&e),
         },
         Command::Check { survey } => match Survey::load(&survey) {
             Ok(s) => {
+                warn(&s);
                 check(&s);
                 ExitCode::SUCCESS
             }
@@ -135,15 +139,19 @@ fn fail_survey(e: &lidarsim::survey::SurveyError) -> ExitCode {
     ExitCode::from(2)
 }
 
-fn simulate(
-    mut survey: Survey,
-    output: &Path,
-    threads: Option<usize>,
-    seed: Option<u64>,
-) -> ExitCode {
-    if let Some(seed) = seed {
-        survey.set_seed(seed);
+/// Prints the survey's warnings to standard error.
+fn warn(survey: &Survey) {
+    let file = survey
+        .source
+        .as_ref()
+        .map_or_else(|| "<demo>".to_string(), |p| p.display().to_string());
+    for w in &survey.warnings {
+        eprintln!("warning: {file}: {w}");
     }
+}
+
+fn simulate(survey: Survey, output: &Path, threads: Option<usize>) -> ExitCode {
+    warn(&survey);
     let threads = match threads {
         Some(0) => return fail(2, "--threads must be at least 1"),
         Some(n) => n,

@@ -105,39 +105,34 @@ pub fn march(
             continue;
         }
         let p = ray.at(t);
-        let mut total = 0.0;
-        let mut tau_parts = [(0u32, 0.0f64, 0.0f64); 8];
-        let mut n = 0;
-        for s in spans[first_open..]
-            .iter()
-            .filter(|s| s.t_in <= t && t < s.t_out)
-        {
-            if let Shape::Crown(c) = &scene.primitives[s.prim as usize].shape {
-                let rho = c.density_at(p);
-                if rho > 0.0 {
-                    let tau = c.extinction_per_m * rho * step;
-                    total += tau;
-                    if n < tau_parts.len() {
-                        tau_parts[n] = (s.prim, rho, tau);
-                        n += 1;
+        let open = || {
+            spans[first_open..]
+                .iter()
+                .filter(move |s| s.t_in <= t && t < s.t_out)
+                .filter_map(|s| match &scene.primitives[s.prim as usize].shape {
+                    Shape::Crown(c) => {
+                        let rho = c.density_at(p);
+                        (rho > 0.0).then(|| (s.prim, rho, c.extinction_per_m * rho * step))
                     }
-                }
-            }
-        }
+                    _ => None,
+                })
+        };
+        let total: f64 = open().map(|(_, _, tau)| tau).sum();
         if total <= 0.0 {
             continue;
         }
         let p_hit = 1.0 - (-total).exp();
         if rng.uniform() < p_hit {
-            // Which crown: in proportion to its share of the optical depth.
+            // Which crown: in proportion to its share of the optical depth
+            // (the densities are evaluated again; this happens once).
             let mut pick = rng.uniform() * total;
-            let mut chosen = tau_parts[0];
-            for part in &tau_parts[..n] {
-                chosen = *part;
-                if pick < part.2 {
+            let mut chosen = (0, 0.0);
+            for (prim, rho, tau) in open() {
+                chosen = (prim, rho);
+                if pick < tau {
                     break;
                 }
-                pick -= part.2;
+                pick -= tau;
             }
             return Fate::Intercepted {
                 t,

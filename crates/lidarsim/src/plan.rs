@@ -71,8 +71,8 @@ pub fn ground_below(caster: &dyn RayCaster, p: DVec3) -> f64 {
         )
     };
     caster
-        .closest_hit_where(&ray, 0.0, 1e6, &ground)
-        .or_else(|| caster.closest_hit(&ray, 0.0, 1e6))
+        .closest_hit_where(&ray, 0.0, f64::INFINITY, &ground)
+        .or_else(|| caster.closest_hit(&ray, 0.0, f64::INFINITY))
         .map_or(0.0, |h| p.z - h.t)
 }
 

@@ -74,6 +74,10 @@ pub struct Summary {
     pub scene_primitives: usize,
     /// Files written, relative to the output directory.
     pub files: Vec<String>,
+    /// Warnings about the survey (see `lidarsim check`).
+    pub warnings: Vec<String>,
+    /// Trees placed by each `[[forest]]` entry.
+    pub forest_trees: Vec<usize>,
     /// The expected figures per flight line.
     pub plan: Plan,
 }
@@ -203,6 +207,8 @@ fn summarize(
         reference_range_m: survey.receiver.reference_range_m,
         scene_primitives,
         files,
+        warnings: survey.warnings.clone(),
+        forest_trees: survey.forest_trees.clone(),
         plan,
     }
 }

@@ -126,11 +126,16 @@ pub fn generate(spec: &ForestSpec, ground_z: &dyn Fn(f64, f64) -> f64) -> Vec<Tr
         let (h0, h1) = spec.height_range_m;
         let height = h0 + rng.uniform() * (h1 - h0);
         let preset = species.preset();
-        // Heights beyond the height curve's reach (it levels off at A) get
-        // the dbh of a tree at 95 % of A.
-        let dbh = species
-            .dbh_from_height_m(height.min(0.95 * preset.height_a_m))
-            .unwrap_or(0.5);
+        // Heights beyond what the height curve gives over its dbh range
+        // take the nearest end of that range.
+        let (d_lo, d_hi) = Species::DBH_RANGE_M;
+        let dbh = species.dbh_from_height_m(height).unwrap_or(
+            if height < species.height_from_dbh_m(d_lo) {
+                d_lo
+            } else {
+                d_hi
+            },
+        );
         let ratio = preset.crown_ratio * (0.85 + 0.3 * rng.uniform());
         let crown_base = height * (1.0 - ratio.min(0.95));
         let mut tree = TreeSpec::new(
@@ -174,11 +179,22 @@ mod tests {
             assert_eq!(a.base_m.z, 2.0);
             assert!((12.0..22.0).contains(&a.height_m));
             assert!(a.crown_base_m > 0.0 && a.crown_base_m < a.height_m);
-            assert!(a.dbh_m > 0.05 && a.dbh_m < 0.8);
+            assert!(a.dbh_m >= 0.03 && a.dbh_m <= 0.8);
             for b in &trees[i + 1..] {
                 let d = (a.base_m.x - b.base_m.x).hypot(a.base_m.y - b.base_m.y);
                 assert!(d >= 1.5);
             }
+        }
+    }
+
+    #[test]
+    fn heights_outside_the_height_curve_keep_sane_diameters() {
+        let mut spec = stand(1);
+        spec.height_range_m = (1.9, 45.0);
+        spec.mix = vec![(Species::Pine, 1.0), (Species::Birch, 1.0)];
+        for t in generate(&spec, &|_, _| 0.0) {
+            assert!((0.03..=0.8).contains(&t.dbh_m), "{t:?}");
+            assert!(t.crown_radius_m <= t.species.crown_radius_m(0.8), "{t:?}");
         }
     }
 

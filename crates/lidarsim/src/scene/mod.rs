@@ -1,10 +1,12 @@
-//! The scene: surfaces with materials and ground-truth classes.
+//! The scene: surfaces and volumes with materials and ground-truth classes.
 //!
-//! A [`Scene`] is a flat list of [`Primitive`]s (planar polygons and
-//! triangles), the [`Material`]s they refer to and the [`SceneObject`]s they
-//! belong to (one per survey polygon or mesh). It knows nothing about rays
-//! beyond the exact per-primitive intersection; finding the closest hit among
-//! many primitives is the job of [`crate::accel`].
+//! A [`Scene`] is a flat list of [`Primitive`]s — planar polygons, mesh
+//! triangles, tree trunks (opaque cones) and tree crowns (volumes the beam
+//! penetrates) — the [`Material`]s they refer to and the [`SceneObject`]s
+//! they belong to (one per survey polygon, mesh or tree). It knows nothing
+//! about rays beyond the exact per-primitive intersection; finding the
+//! closest hit among many primitives is the job of [`crate::accel`], and the
+//! way through crowns that of [`crate::canopy`].
 
 pub mod forest;
 mod obj;

@@ -142,11 +142,15 @@ impl Species {
         p.height_a_m / (1.0 + p.height_b1 / d + p.height_b2 / (d * d))
     }
 
+    /// Range of dbh over which the height curve is used, m: 3–80 cm, the
+    /// span of the data such curves are fitted to.
+    pub const DBH_RANGE_M: (f64, f64) = (0.03, 0.8);
+
     /// dbh (m) of a tree of the given height: the height curve inverted by
-    /// bisection over 1–250 cm (it increases with d there). Heights the curve
-    /// does not reach in that range (it levels off at `A`) give `None`.
+    /// bisection over [`Species::DBH_RANGE_M`] (it increases with d there).
+    /// Heights outside the curve's range over those diameters give `None`.
     pub fn dbh_from_height_m(self, height_m: f64) -> Option<f64> {
-        let (mut lo, mut hi) = (0.01, 2.5);
+        let (mut lo, mut hi) = Self::DBH_RANGE_M;
         if height_m < self.height_from_dbh_m(lo) || height_m > self.height_from_dbh_m(hi) {
             return None;
         }
@@ -437,7 +441,11 @@ impl Crown {
         let rc = if r > 0.0 { d / r } else { 0.0 };
         // cos(6φ + f) without trigonometry of φ: (cos φ + i sin φ)⁶ by
         // complex squaring and multiplication.
-        let (c1, s1) = if d > 0.0 { (dx / d, dy / d) } else { (1.0, 0.0) };
+        let (c1, s1) = if d > 0.0 {
+            (dx / d, dy / d)
+        } else {
+            (1.0, 0.0)
+        };
         let (c2, s2) = (c1 * c1 - s1 * s1, 2.0 * c1 * s1);
         let (c3, s3) = (c2 * c1 - s2 * s1, c2 * s1 + s2 * c1);
         let (c6, s6) = (c3 * c3 - s3 * s3, 2.0 * c3 * s3);
@@ -607,5 +615,6 @@ mod tests {
             }
         }
         assert!(Species::Pine.dbh_from_height_m(40.0).is_none());
+        assert!(Species::Birch.dbh_from_height_m(2.0).is_none());
     }
 }

@@ -22,7 +22,6 @@ use crate::geometry::DVec3;
 use crate::platform::{FlightLine, Sway, SwayConfig};
 use crate::scanner::{Mirror, MirrorProfile};
 use crate::scene::forest::{ForestSpec, generate};
-use crate::scene::tree::BREAST_HEIGHT_M;
 use crate::scene::{
     Material, MeshPlacement, Polygon, Primitive, Scene, Shape, Species, SurfaceClass, TreeSpec,
     load_obj,
@@ -161,6 +160,9 @@ pub struct Survey {
     pub canopy: CanopyConfig,
     /// Trees placed by `[[forest]]` entries, per entry.
     pub forest_trees: Vec<usize>,
+    /// Things that are allowed but probably not what was meant, each
+    /// naming its key (printed by the command line, kept in the summary).
+    pub warnings: Vec<String>,
     /// What to write.
     pub output: OutputSettings,
     /// The surfaces.
@@ -260,6 +262,10 @@ impl Checker {
     }
 }
 
+/// Shortest tree accepted, m (the trunk tapers from breast height, 1.3 m,
+/// to the top, so a tree must be clearly taller than that).
+pub const MIN_TREE_HEIGHT_M: f64 = 2.0;
+
 /// Validates one `[[tree]]` entry.
 fn check_tree(
     c: &mut Checker,
@@ -303,15 +309,17 @@ fn check_tree(
         "height of the crown base in metres",
     );
     let dbh = c.number(tp.key("dbh_m"), t.dbh_m, 0.2, 0.0, true, 5.0, " m");
+    let problems_before = c.problems.len();
     let height = c.number(
         tp.key("height_m"),
         t.height_m,
         15.0,
-        BREAST_HEIGHT_M,
-        true,
+        MIN_TREE_HEIGHT_M,
+        false,
         150.0,
         " m",
     );
+    let height_ok = c.problems.len() == problems_before;
     let crown_base = c.number(
         tp.key("crown_base_m"),
         t.crown_base_m,
@@ -321,7 +329,7 @@ fn check_tree(
         150.0,
         " m",
     );
-    if crown_base >= height {
+    if height_ok && crown_base >= height {
         c.err(
             tp.key("crown_base_m"),
             format!("must be below the tree top ({height} m), got {crown_base}"),
@@ -331,7 +339,7 @@ fn check_tree(
     if t.dbh_m.is_none() || t.height_m.is_none() || t.crown_base_m.is_none() {
         return None;
     }
-    let mut tree = TreeSpec::new(base, species, dbh, height, crown_base.min(height));
+    let mut tree = TreeSpec::new(base, species, dbh, height, crown_base);
     tree.foliage_reflectance = c.number(
         tp.key("foliage_reflectance"),
         t.foliage_reflectance,
@@ -455,25 +463,21 @@ fn check_forest(
                     ),
                 }
             }
-            if mix.is_empty() && !m.is_empty() {
-                return None;
-            }
-            if mix.is_empty() {
+            if m.is_empty() {
                 c.err(fp.key("species"), "names no species");
-                return None;
             }
             mix
         }
     };
     let heights = match &f.height_m {
         None => (15.0, 25.0),
-        Some(h) if h.len() == 2 && h[0] > BREAST_HEIGHT_M + 0.5 && h[1] >= h[0] && h[1] < 150.0 => {
+        Some(h) if h.len() == 2 && h[0] >= MIN_TREE_HEIGHT_M && h[1] >= h[0] && h[1] <= 150.0 => {
             (h[0], h[1])
         }
         Some(_) => {
             c.err(
                 fp.key("height_m"),
-                "must be [smallest, largest] tree height in metres, from 1.8 m up, smallest first",
+                "must be [smallest, largest] tree height in metres, from 2 to 150 m, smallest first",
             );
             (15.0, 25.0)
         }
@@ -490,6 +494,9 @@ fn check_forest(
     let seed = f
         .seed
         .unwrap_or_else(|| crate::rng::mix64(survey_seed.wrapping_add(0xF0_2E57 + index as u64)));
+    if mix.is_empty() {
+        return None;
+    }
     Some(ForestSpec {
         area: area?,
         stems_per_ha: stems,
@@ -503,6 +510,13 @@ fn check_forest(
 impl Survey {
     /// Reads and validates a survey file. Mesh paths are relative to it.
     pub fn load(path: &Path) -> Result<Self, SurveyError> {
+        Self::load_with_seed(path, None)
+    }
+
+    /// [`Survey::load`] with the file's seed replaced by `seed` (the
+    /// command line's `--seed`) before anything random is drawn, so that
+    /// generated forests and sway follow the new seed too.
+    pub fn load_with_seed(path: &Path, seed: Option<u64>) -> Result<Self, SurveyError> {
         let file = path.display().to_string();
         let text = std::fs::read(path).map_err(|e| SurveyError {
             diagnostics: vec![Diagnostic {
@@ -529,12 +543,21 @@ impl Survey {
                 }],
             }
         })?;
-        Self::from_toml(&text, Some(path))
+        Self::from_toml_with_seed(&text, Some(path), seed)
     }
 
     /// Parses and validates survey text; `path` (if any) names the file in
     /// messages and anchors relative mesh paths.
     pub fn from_toml(text: &str, path: Option<&Path>) -> Result<Self, SurveyError> {
+        Self::from_toml_with_seed(text, path, None)
+    }
+
+    /// [`Survey::from_toml`] with the seed replaced by `seed` if given.
+    pub fn from_toml_with_seed(
+        text: &str,
+        path: Option<&Path>,
+        seed: Option<u64>,
+    ) -> Result<Self, SurveyError> {
         let file = path.map_or_else(|| "<survey>".to_string(), |p| p.display().to_string());
         let locator = Locator::new(text);
         let raw: RawSurvey = toml::from_str(text).map_err(|e| {
@@ -570,6 +593,10 @@ impl Survey {
                 }],
             }
         })?;
+        let mut raw = raw;
+        if seed.is_some() {
+            raw.seed = seed;
+        }
         Self::from_raw(raw, path).map_err(|problems| SurveyError {
             diagnostics: problems
                 .into_iter()
@@ -1070,6 +1097,7 @@ impl Survey {
             }
         }
         let mut forest_trees = Vec::new();
+        let mut warnings = Vec::new();
         if !raw.forests.is_empty() {
             // Trees stand on the ground (or road, water) below them, else on
             // any surface, else at z = 0.
@@ -1084,6 +1112,18 @@ impl Survey {
                     continue;
                 };
                 let trees = generate(&spec, &ground_z);
+                let wanted = (crate::scene::forest::polygon_area(&spec.area) / 10_000.0
+                    * spec.stems_per_ha)
+                    .round() as usize;
+                if trees.len() < wanted {
+                    warnings.push(format!(
+                        "key `{fp}`: placed {} of {wanted} trees: min_spacing_m = {} m leaves no \
+                         room for {} stems/ha",
+                        trees.len(),
+                        spec.min_spacing_m,
+                        spec.stems_per_ha
+                    ));
+                }
                 forest_trees.push(trees.len());
                 for (j, tree) in trees.iter().enumerate() {
                     scene.add_tree(tree, whorl, format!("forest[{i}].tree[{j}]"));
@@ -1094,7 +1134,8 @@ impl Survey {
         if scene.primitives.is_empty() && c.problems.is_empty() {
             c.err(
                 root,
-                "the scene is empty: add [[polygon]] or [[mesh]] entries for the laser to hit",
+                "the scene is empty: add [[polygon]], [[mesh]], [[tree]] or [[forest]] entries \
+                 for the laser to hit",
             );
         }
 
@@ -1135,6 +1176,7 @@ impl Survey {
             lines,
             canopy,
             forest_trees,
+            warnings,
             output: OutputSettings {
                 formats,
                 trajectory_interval_s,
@@ -1145,17 +1187,6 @@ impl Survey {
             raw,
             source: path.map(Path::to_path_buf),
         })
-    }
-
-    /// Replaces the seed (command-line `--seed`), re-seeding the sway.
-    pub fn set_seed(&mut self, seed: u64) {
-        self.seed = seed;
-        self.raw.seed = Some(seed);
-        if let Some(cfg) = &self.sway {
-            for l in &mut self.lines {
-                l.sway = Some(Sway::new(cfg, seed, l.index));
-            }
-        }
     }
 
     /// Number of pulses of a flight line: ticks `k = 0, 1, …` while
@@ -1237,6 +1268,62 @@ vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
             ["scanner.prf_hz", "scanner.subrays", "polygon[0].material"]
         );
         assert!(d[2].message.contains("defined: grass"));
+    }
+
+    #[test]
+    fn trees_and_forests_are_validated_together() {
+        let bad = format!(
+            "{MINIMAL}\n[[tree]]\nposition_m = [0, 0, 0]\nspecies = \"oak\"\ndbh_m = -1\n\
+             height_m = 200\ncrown_base_m = 20\n\n[[forest]]\nrectangle_m = [0, 0, -5, 5]\n\
+             stems_per_ha = 100\nspecies = {{ elm = 1.0 }}\nheight_m = [1.0, 5.0]\n"
+        );
+        let d = diagnostics(&bad);
+        let keys: Vec<&str> = d.iter().map(|d| d.key.as_str()).collect();
+        assert_eq!(
+            keys,
+            [
+                "tree[0].species",
+                "tree[0].dbh_m",
+                "tree[0].height_m",
+                "forest[0].rectangle_m",
+                "forest[0].species.elm",
+                "forest[0].height_m"
+            ],
+            "{d:#?}"
+        );
+    }
+
+    #[test]
+    fn forests_stand_on_the_ground_and_follow_the_seed() {
+        let text = format!(
+            "{}\n[[forest]]\nrectangle_m = [-50, -50, 50, 50]\nstems_per_ha = 300\n",
+            MINIMAL.replace(
+                "[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]",
+                "[-300, -300, -7], [300, -300, -7], [300, 300, -7], [-300, 300, -7]"
+            )
+        );
+        let a = Survey::from_toml(&text, None).unwrap();
+        assert_eq!(a.forest_trees, [300]);
+        let trunks = |s: &Survey| -> Vec<crate::geometry::Aabb> {
+            s.scene
+                .primitives
+                .iter()
+                .filter(|p| matches!(p.shape, Shape::Trunk(_)))
+                .map(|p| p.bounds())
+                .collect()
+        };
+        assert!(trunks(&a).iter().all(|b| b.min.z == -7.0));
+        let b = Survey::from_toml_with_seed(&text, None, Some(99)).unwrap();
+        assert_ne!(trunks(&a)[0], trunks(&b)[0]);
+        assert!(a.warnings.is_empty());
+        // Too many stems for the spacing: placed anyway, with a warning.
+        let crowded = text.replace(
+            "stems_per_ha = 300",
+            "stems_per_ha = 5000\nmin_spacing_m = 4",
+        );
+        let c = Survey::from_toml(&crowded, None).unwrap();
+        assert!(c.forest_trees[0] < 5000);
+        assert!(c.warnings[0].contains("forest[0]"), "{:?}", c.warnings);
     }
 
     #[test]
