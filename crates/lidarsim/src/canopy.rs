@@ -112,7 +112,7 @@ pub fn march(
                 .filter_map(|s| match &scene.primitives[s.prim as usize].shape {
                     Shape::Crown(c) => {
                         let rho = c.density_at(p);
-                        (rho > 0.0).then(|| (s.prim, rho, c.extinction_per_m * rho * step))
+                        (rho > 0.0).then_some((s.prim, rho, c.extinction_per_m * rho * step))
                     }
                     _ => None,
                 })
