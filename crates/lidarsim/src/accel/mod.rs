@@ -1,7 +1,7 @@
 //! Acceleration structures: which surface does a ray meet first?
 //!
 //! The rest of the simulator sees only the [`RayCaster`] trait. It takes
-//! whole pulses ([`RayCaster::cast_pulse`]) so that an implementation can
+//! whole pulses ([`RayCaster::trace_pulse`]) so that an implementation can
 //! exploit the coherence of a pulse's sub-rays (DESIGN.md, "Performance
 //! stance"); the default implementation casts them one by one.
 //!
