@@ -53,6 +53,7 @@ pub mod canopy;
 pub mod demo;
 pub mod detection;
 pub mod geometry;
+pub mod navigation;
 pub mod output;
 pub mod plan;
 pub mod platform;

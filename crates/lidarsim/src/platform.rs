@@ -117,6 +117,8 @@ pub struct FlightLine {
     pub start_time_s: f64,
     /// Sway of this line (`None`: level, steady flight).
     pub sway: Option<Sway>,
+    /// Correlated GNSS/IMU errors of this line (empty: none).
+    pub nav_errors: crate::navigation::LineErrors,
 }
 
 impl FlightLine {
@@ -166,6 +168,7 @@ mod tests {
             speed_mps: 50.0,
             start_time_s: 0.0,
             sway: None,
+            nav_errors: Default::default(),
         }
     }
 

@@ -30,6 +30,10 @@ pub enum Purpose {
     Canopy = 4,
     /// Placement of generated forests (line = forest index).
     Forest = 5,
+    /// Correlated GNSS/IMU errors of a flight line (pulse index 0).
+    Navigation = 6,
+    /// White navigation, ranging and encoder noise of one pulse.
+    Measurement = 7,
     /// Spare purpose for tests and user extensions.
     Test = 0xFFFF,
 }

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::accel::{Bvh, RayCaster};
+use crate::navigation::observed_pose;
 use crate::output::{AtomicFile, LasSettings, LasWriter, PointSink, XyzWriter, write_atomic};
 use crate::plan::{Plan, plan};
 use crate::sim::{RunCounts, Simulator, Timer};
@@ -122,9 +123,17 @@ pub fn run_to_dir(
         files.push("points.xyz".to_string());
     }
 
-    let traj_path = out_dir.join("trajectory.csv");
-    write_trajectory(survey, &traj_path).map_err(io_err(&traj_path))?;
-    files.push("trajectory.csv".to_string());
+    // The trajectory flown (trajectory.csv, kept under its first name, and
+    // trajectory_true.csv) and the one the GNSS/IMU measured.
+    for (name, observed) in [
+        ("trajectory.csv", false),
+        ("trajectory_true.csv", false),
+        ("trajectory_observed.csv", true),
+    ] {
+        let path = out_dir.join(name);
+        write_trajectory(survey, &path, observed).map_err(io_err(&path))?;
+        files.push(name.to_string());
+    }
 
     let sim = Simulator::new(survey, &bvh);
     let timer = Timer::start();
@@ -243,13 +252,16 @@ pub fn las_settings(survey: &Survey, caster: &dyn RayCaster) -> LasSettings {
         },
         creation_day_year: crate::output::day_of_year(now),
         generating_software: format!("lidarsim {}", env!("CARGO_PKG_VERSION")),
+        error_extra_bytes: !survey.navigation.is_zero(),
     }
 }
 
-/// Writes the flown trajectory, one row per `trajectory_interval_s` of
-/// each flight line: time (in the points' time base), position, attitude in
-/// degrees, line number.
-pub fn write_trajectory(survey: &Survey, path: &Path) -> io::Result<()> {
+/// Writes the trajectory, one row per `trajectory_interval_s` of each
+/// flight line: time (in the points' time base), position, attitude in
+/// degrees, line number. `observed` selects the trajectory the GNSS/IMU
+/// measured (biases and correlated errors; the per-pulse white noise is not
+/// in it) instead of the one flown.
+pub fn write_trajectory(survey: &Survey, path: &Path, observed: bool) -> io::Result<()> {
     let mut f = AtomicFile::create(path)?;
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
     let dt = survey.output.trajectory_interval_s;
@@ -259,7 +271,12 @@ pub fn write_trajectory(survey: &Survey, path: &Path) -> io::Result<()> {
         let n = (line.duration_s() / dt).floor() as u64;
         for j in 0..=n {
             let t = j as f64 * dt;
-            let p = line.pose_at(t);
+            let truth = line.pose_at(t);
+            let p = if observed {
+                observed_pose(&truth, &survey.navigation, &line.nav_errors, t, None)
+            } else {
+                truth
+            };
             writeln!(
                 w,
                 "{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}",

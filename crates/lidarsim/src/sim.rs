@@ -18,7 +18,8 @@ use rayon::prelude::*;
 use crate::accel::{PulseTrace, RayCaster, VolumeSpan};
 use crate::canopy::{CanopyConfig, Fate, march};
 use crate::detection::{Detector, Echo};
-use crate::geometry::{DVec3, Ray};
+use crate::geometry::{DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
+use crate::navigation::observed_pose;
 use crate::output::{PointRecord, PointSink};
 use crate::platform::FlightLine;
 use crate::radiometry::{Speckle, surface_return};
@@ -110,6 +111,10 @@ pub struct Simulator<'a> {
     speckle: Option<Speckle>,
     canopy: CanopyConfig,
     time_offset_s: f64,
+    /// Boresight misalignment of the real scanner (identity without).
+    boresight: DMat3,
+    /// True when no navigation or measurement error is configured.
+    exact_georeferencing: bool,
 }
 
 impl<'a> Simulator<'a> {
@@ -124,6 +129,8 @@ impl<'a> Simulator<'a> {
             pattern: BeamPattern::new(survey.scanner.subrays, survey.scanner.divergence_rad),
             speckle: survey.speckle_looks.and_then(Speckle::new),
             canopy: survey.canopy,
+            boresight: survey.navigation.boresight(),
+            exact_georeferencing: survey.navigation.is_zero(),
             receiver,
             detector,
             time_offset_s: survey.output.gps_start_time_s.unwrap_or(0.0),
@@ -160,11 +167,14 @@ impl<'a> Simulator<'a> {
         let prf = s.scanner.prf_hz;
         let t_line = k as f64 / prf;
         let t = line.start_time_s + t_line;
+        // The true pose casts the rays: the scanner sits at the lever arm
+        // from the IMU and is turned by the boresight misalignment.
         let pose = line.pose_at(t_line);
         let mirror = &s.scanner.mirror;
         let theta = mirror.angle_at(t);
-        let rot = pose.attitude.scanner_to_world();
-        let origin = pose.position_m;
+        let body = pose.attitude.body_to_world();
+        let rot = body * self.boresight * SCANNER_TO_LEVEL_NORTH;
+        let origin = pose.position_m + body * s.navigation.lever_arm_m;
         let central = rot * Mirror::beam_direction(theta);
 
         // Sub-rays in the world frame, cast as one pulse.
@@ -256,10 +266,27 @@ impl<'a> Simulator<'a> {
             return 0;
         }
 
+        // Georeferencing uses what the processing knows: the observed pose
+        // (GNSS/IMU errors), no boresight or lever arm, the encoder's angle
+        // and the measured ranges (navigation.rs).
+        let nav = &s.navigation;
+        let mut measure = Stream::new(s.seed, line.index, k, Purpose::Measurement);
+        let (obs_origin, obs_attitude, obs_central) = if self.exact_georeferencing {
+            (origin, pose.attitude, central)
+        } else {
+            let obs = observed_pose(&pose, nav, &line.nav_errors, t_line, Some(&mut measure));
+            let theta_obs = if nav.encoder_sigma_rad > 0.0 {
+                theta + nav.encoder_sigma_rad * measure.normal()
+            } else {
+                theta
+            };
+            let dir = obs.attitude.scanner_to_world() * Mirror::beam_direction(theta_obs);
+            (obs.position_m, obs.attitude, dir)
+        };
         // Attributes shared by the pulse's points.
-        let right = pose.attitude.body_to_world() * DVec3::X;
+        let right = obs_attitude.body_to_world() * DVec3::X;
         let right_h = DVec3::new(right.x, right.y, 0.0).normalize_or_zero();
-        let scan_angle_deg = central.dot(right_h).atan2(-central.z).to_degrees();
+        let scan_angle_deg = obs_central.dot(right_h).atan2(-obs_central.z).to_degrees();
         let moving_left = mirror.moving_left_at(t);
         // The next pulse's time from its own tick, exactly as it will be
         // computed for that pulse, so that the two agree on the direction.
@@ -268,7 +295,14 @@ impl<'a> Simulator<'a> {
         let bin_s = s.receiver.bin_s;
 
         for (i, echo) in scratch.echoes.iter().enumerate() {
-            let position = origin + central * echo.range_m;
+            let truth = origin + central * echo.range_m;
+            let measured_range = if nav.range_sigma_m > 0.0 {
+                echo.range_m + nav.range_sigma_m * measure.normal()
+            } else {
+                echo.range_m
+            };
+            // Specification Eq. 1 with the observed pose and direction.
+            let position = obs_origin + obs_central * measured_range;
             // Ground truth: the surface that put most energy into the echo.
             let lo = echo.first_bin as f64;
             let hi = echo.last_bin as f64 + 1.0;
@@ -292,7 +326,7 @@ impl<'a> Simulator<'a> {
                 Some((p, _)) => {
                     let prim = &scene.primitives[p as usize];
                     let h = if prim.class == SurfaceClass::Vegetation {
-                        self.height_above_ground(position)
+                        self.height_above_ground(truth)
                     } else {
                         0.0
                     };
@@ -313,7 +347,8 @@ impl<'a> Simulator<'a> {
                     .clamp(0.0, 65535.0) as u16,
                 amplitude: echo.amplitude,
                 echo_width_ns: echo.width_ns,
-                range_m: echo.range_m,
+                range_m: measured_range,
+                error_m: position - truth,
                 return_number: (i + 1) as u8,
                 number_of_returns: n as u8,
                 scan_direction_positive: !moving_left,

@@ -193,3 +193,53 @@ fn raw_header_bytes_follow_the_specification() {
     assert_eq!(t0, 400_000_000.0);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn error_vectors_are_extra_bytes_with_a_descriptor() {
+    let survey = flat_survey("[gnss]\nbias_m = [0.25, -0.5, 0.125]");
+    let dir = out_dir("extra");
+    let summary = run_to_dir(
+        &survey,
+        &dir,
+        &RunOptions {
+            threads: 2,
+            progress: &|_| {},
+        },
+    )
+    .unwrap();
+    let mut reader = las::Reader::from_path(dir.join("points.las")).unwrap();
+    let header = reader.header().clone();
+    // Point format 6 with 12 extra bytes, described by one Extra Bytes VLR
+    // (user ID LASF_Spec, record ID 4) of three 192-byte descriptors.
+    assert_eq!(header.point_format().len(), 42);
+    assert_eq!(header.point_format().extra_bytes, 12);
+    let vlr = header
+        .vlrs()
+        .iter()
+        .find(|v| v.user_id == "LASF_Spec" && v.record_id == 4)
+        .expect("Extra Bytes VLR");
+    assert_eq!(vlr.data.len(), 3 * 192);
+    for (k, name) in ["error_x", "error_y", "error_z"].iter().enumerate() {
+        let d = &vlr.data[k * 192..(k + 1) * 192];
+        assert_eq!(d[2], 9, "data type float");
+        assert_eq!(&d[4..4 + name.len()], name.as_bytes());
+    }
+    let points: Vec<las::Point> = reader
+        .read_all()
+        .unwrap()
+        .points()
+        .collect::<Result<_, _>>()
+        .unwrap();
+    assert_eq!(points.len() as u64, summary.points);
+    for p in &points {
+        let e: Vec<f32> = p
+            .extra_bytes
+            .chunks(4)
+            .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert_eq!(e, [0.25, -0.5, 0.125]);
+        // The bias moved the point: the ground is at z = 0.125.
+        assert!((p.z - 0.125).abs() < 0.011);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

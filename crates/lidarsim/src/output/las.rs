@@ -30,7 +30,23 @@ pub struct LasSettings {
     pub creation_day_year: (u16, u16),
     /// Generating software, up to 32 bytes.
     pub generating_software: String,
+    /// Append the georeferencing error vector (`error_x`, `error_y`,
+    /// `error_z`, 32-bit floats, m) to every point as LAS 1.4 extra bytes,
+    /// described by an Extra Bytes VLR.
+    pub error_extra_bytes: bool,
 }
+
+/// Names and descriptions of the error extra bytes.
+const ERROR_FIELDS: [(&str, &str); 3] = [
+    ("error_x", "computed minus true x (m)"),
+    ("error_y", "computed minus true y (m)"),
+    ("error_z", "computed minus true z (m)"),
+];
+
+/// Size of a VLR header, bytes (LAS 1.4 R15, Table 13).
+const VLR_HEADER_LEN: usize = 54;
+/// Size of one Extra Bytes descriptor, bytes (LAS 1.4 R15, Table 24).
+const EXTRA_BYTES_DESCRIPTOR_LEN: usize = 192;
 
 /// Streams points into a LAS 1.4 file; the header (counts, bounds) is
 /// written again when the file is finished.
@@ -58,7 +74,9 @@ impl LasWriter {
             buf: Vec::with_capacity(1 << 16),
         };
         let header = w.header();
+        let vlrs = w.vlrs();
         w.file.writer().write_all(&header)?;
+        w.file.writer().write_all(&vlrs)?;
         Ok(w)
     }
 
@@ -75,6 +93,46 @@ impl LasWriter {
                 ),
             ))
         }
+    }
+
+    /// Bytes of one point record.
+    fn record_len(&self) -> u16 {
+        POINT_FORMAT_6_LEN
+            + if self.settings.error_extra_bytes {
+                12
+            } else {
+                0
+            }
+    }
+
+    /// The VLRs between the header and the points.
+    fn vlrs(&self) -> Vec<u8> {
+        let mut v = Vec::new();
+        if self.settings.error_extra_bytes {
+            // VLR header (Table 13): reserved, user ID, record ID, length
+            // after header, description.
+            v.extend_from_slice(&0u16.to_le_bytes());
+            v.extend_from_slice(&fixed_str::<16>("LASF_Spec"));
+            v.extend_from_slice(&4u16.to_le_bytes());
+            let len = (ERROR_FIELDS.len() * EXTRA_BYTES_DESCRIPTOR_LEN) as u16;
+            v.extend_from_slice(&len.to_le_bytes());
+            v.extend_from_slice(&fixed_str::<32>("georeferencing errors"));
+            for (name, description) in ERROR_FIELDS {
+                // Extra Bytes descriptor (Table 24): reserved, data type 9
+                // (float), options 0 (no no-data/min/max/scale/offset), name,
+                // unused, no_data, min, max, scale, offset, description.
+                v.extend_from_slice(&[0, 0, 9, 0]);
+                v.extend_from_slice(&fixed_str::<32>(name));
+                v.extend_from_slice(&[0u8; 4]);
+                v.extend_from_slice(&[0u8; 24 * 5]);
+                v.extend_from_slice(&fixed_str::<32>(description));
+            }
+            debug_assert_eq!(
+                v.len(),
+                VLR_HEADER_LEN + ERROR_FIELDS.len() * EXTRA_BYTES_DESCRIPTOR_LEN
+            );
+        }
+        v
     }
 
     /// The 375-byte public header block (LAS 1.4 R15, Table 3).
@@ -94,10 +152,11 @@ impl LasWriter {
         h.extend_from_slice(&s.creation_day_year.0.to_le_bytes());
         h.extend_from_slice(&s.creation_day_year.1.to_le_bytes());
         h.extend_from_slice(&HEADER_SIZE.to_le_bytes());
-        h.extend_from_slice(&u32::from(HEADER_SIZE).to_le_bytes()); // offset to point data
-        h.extend_from_slice(&0u32.to_le_bytes()); // number of VLRs
+        let vlrs = self.vlrs().len() as u32;
+        h.extend_from_slice(&(u32::from(HEADER_SIZE) + vlrs).to_le_bytes()); // offset to points
+        h.extend_from_slice(&u32::from(vlrs > 0).to_le_bytes()); // number of VLRs
         h.push(6); // point data record format
-        h.extend_from_slice(&POINT_FORMAT_6_LEN.to_le_bytes());
+        h.extend_from_slice(&self.record_len().to_le_bytes());
         // Legacy point counts: zero for point formats 6–10.
         h.extend_from_slice(&0u32.to_le_bytes());
         h.extend_from_slice(&[0u8; 20]);
@@ -171,6 +230,11 @@ impl PointSink for LasWriter {
             self.buf.extend_from_slice(&sa.to_le_bytes());
             self.buf.extend_from_slice(&p.point_source_id.to_le_bytes());
             self.buf.extend_from_slice(&p.gps_time_s.to_le_bytes());
+            if self.settings.error_extra_bytes {
+                for e in [p.error_m.x, p.error_m.y, p.error_m.z] {
+                    self.buf.extend_from_slice(&(e as f32).to_le_bytes());
+                }
+            }
             self.count += 1;
             self.by_return[usize::from(rn) - 1] += 1;
         }

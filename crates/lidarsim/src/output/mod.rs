@@ -32,8 +32,11 @@ pub struct PointRecord {
     pub amplitude: f64,
     /// Echo width (FWHM), ns.
     pub echo_width_ns: f64,
-    /// Range from the sensor, m.
+    /// Measured range from the sensor, m.
     pub range_m: f64,
+    /// Georeferencing error: computed position minus where the central ray
+    /// really met the echo range, m (zero without navigation errors).
+    pub error_m: DVec3,
     /// 1-based number of this echo within its pulse.
     pub return_number: u8,
     /// Number of echoes of the pulse.

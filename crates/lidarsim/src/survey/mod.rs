@@ -19,6 +19,7 @@ use std::path::{Path, PathBuf};
 use crate::canopy::CanopyConfig;
 use crate::detection::DetectorConfig;
 use crate::geometry::DVec3;
+use crate::navigation::{ErrorModel, LineErrors, NavigationErrors};
 use crate::platform::{FlightLine, Sway, SwayConfig};
 use crate::scanner::{Mirror, MirrorProfile};
 use crate::scene::forest::{ForestSpec, generate};
@@ -158,6 +159,8 @@ pub struct Survey {
     pub lines: Vec<FlightLine>,
     /// How sub-rays march through tree crowns.
     pub canopy: CanopyConfig,
+    /// GNSS/IMU, boresight, lever-arm, ranging and encoder errors.
+    pub navigation: NavigationErrors,
     /// Trees placed by `[[forest]]` entries, per entry.
     pub forest_trees: Vec<usize>,
     /// Things that are allowed but probably not what was meant, each
@@ -259,6 +262,187 @@ impl Checker {
                 SurfaceClass::Unclassified
             }),
         }
+    }
+}
+
+/// Reads the axis values of `sigma_*` / `random_walk_*`: one number for all
+/// three axes or a list of three.
+fn axes(
+    c: &mut Checker,
+    path: KeyPath,
+    v: &Option<raw::NumberOrList>,
+    default: [f64; 3],
+    scale: f64,
+) -> [f64; 3] {
+    let vals = match v {
+        None => return default,
+        Some(raw::NumberOrList::Number(x)) => [*x; 3],
+        Some(raw::NumberOrList::List(l)) if l.len() == 3 => [l[0], l[1], l[2]],
+        Some(raw::NumberOrList::List(l)) => {
+            c.err(
+                path,
+                format!("must be one number or 3 numbers, got {}", l.len()),
+            );
+            return default;
+        }
+    };
+    if vals.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+        c.err(path, "must be at least 0");
+        return default;
+    }
+    vals.map(|x| x * scale)
+}
+
+/// Reads a `[x, y, z]` or `[roll, pitch, yaw]` list.
+fn triple(c: &mut Checker, path: KeyPath, v: &Option<Vec<f64>>, scale: f64) -> [f64; 3] {
+    match v {
+        None => [0.0; 3],
+        Some(l) if l.len() == 3 && l.iter().all(|x| x.is_finite()) => {
+            [l[0] * scale, l[1] * scale, l[2] * scale]
+        }
+        Some(_) => {
+            c.err(path, "must be a list of 3 finite numbers");
+            [0.0; 3]
+        }
+    }
+}
+
+/// Validates `preset`, `[gnss]`, `[imu]`, `[boresight]` and `[ranging]`.
+fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
+    let root = KeyPath::root();
+    let lookup = |c: &mut Checker, path: KeyPath, name: &Option<String>| match name {
+        None => None,
+        Some(n) => crate::navigation::preset(n).or_else(|| {
+            c.err(
+                path,
+                format!(
+                    "unknown preset '{n}'; expected one of: {}",
+                    crate::navigation::PRESETS.join(", ")
+                ),
+            );
+            None
+        }),
+    };
+    let top = lookup(c, root.key("preset"), &raw.preset);
+    let deg = 1f64.to_radians();
+    let group = |c: &mut Checker, key: &str, r: &raw::RawErrors, base: ErrorModel| {
+        let p = root.key(key);
+        let own = lookup(c, p.key("preset"), &r.preset);
+        let base = match own {
+            Some((g, i)) => {
+                if key == "gnss" {
+                    g
+                } else {
+                    i
+                }
+            }
+            None => base,
+        };
+        let (bias, sigma, walk, scale, unit_keys) = if key == "gnss" {
+            (
+                &r.bias_m,
+                &r.sigma_m,
+                &r.random_walk_m,
+                1.0,
+                ["bias_deg", "sigma_deg", "random_walk_deg"],
+            )
+        } else {
+            (
+                &r.bias_deg,
+                &r.sigma_deg,
+                &r.random_walk_deg,
+                deg,
+                ["bias_m", "sigma_m", "random_walk_m"],
+            )
+        };
+        let wrong_unit = [
+            r.bias_deg.is_some(),
+            r.sigma_deg.is_some(),
+            r.random_walk_deg.is_some(),
+        ];
+        let wrong_unit_m = [
+            r.bias_m.is_some(),
+            r.sigma_m.is_some(),
+            r.random_walk_m.is_some(),
+        ];
+        let wrong = if key == "gnss" {
+            wrong_unit
+        } else {
+            wrong_unit_m
+        };
+        for (k, w) in unit_keys.iter().zip(wrong) {
+            if w {
+                c.err(
+                    p.key(k),
+                    format!(
+                        "[{key}] takes {}",
+                        if key == "gnss" {
+                            "metres (_m keys)"
+                        } else {
+                            "degrees (_deg keys)"
+                        }
+                    ),
+                );
+            }
+        }
+        let suffix = if key == "gnss" { "_m" } else { "_deg" };
+        let mut m = base;
+        if bias.is_some() {
+            m.bias = triple(c, p.key(&format!("bias{suffix}")), bias, scale);
+        }
+        m.sigma = axes(c, p.key(&format!("sigma{suffix}")), sigma, m.sigma, scale);
+        m.random_walk = axes(
+            c,
+            p.key(&format!("random_walk{suffix}")),
+            walk,
+            m.random_walk,
+            scale,
+        );
+        if r.correlation_time_s.is_some() || m.correlation_time_s <= 0.0 {
+            m.correlation_time_s = c.positive(
+                p.key("correlation_time_s"),
+                r.correlation_time_s,
+                if m.correlation_time_s > 0.0 {
+                    m.correlation_time_s
+                } else {
+                    100.0
+                },
+                " s",
+            );
+        }
+        m
+    };
+    let (g0, i0) = top.unwrap_or_default();
+    let gnss = group(c, "gnss", &raw.gnss, g0);
+    let imu = group(c, "imu", &raw.imu, i0);
+    let bp = root.key("boresight");
+    let rp = root.key("ranging");
+    NavigationErrors {
+        gnss,
+        imu,
+        boresight_rad: triple(c, bp.key("angles_deg"), &raw.boresight.angles_deg, deg),
+        lever_arm_m: {
+            let [x, y, z] = triple(c, bp.key("lever_arm_m"), &raw.boresight.lever_arm_m, 1.0);
+            DVec3::new(x, y, z)
+        },
+        range_sigma_m: c.number(
+            rp.key("sigma_m"),
+            raw.ranging.sigma_m,
+            0.0,
+            0.0,
+            false,
+            100.0,
+            " m",
+        ),
+        encoder_sigma_rad: c.number(
+            rp.key("encoder_sigma_deg"),
+            raw.ranging.encoder_sigma_deg,
+            0.0,
+            0.0,
+            false,
+            10.0,
+            "°",
+        ) * deg,
     }
 }
 
@@ -806,6 +990,9 @@ impl Survey {
             " s",
         );
 
+        // Navigation errors: preset first, then the tables' own keys.
+        let navigation = check_navigation(&mut c, &raw);
+
         // [[flight_line]]
         let mut lines = Vec::new();
         if raw.flight_lines.is_empty() {
@@ -848,9 +1035,11 @@ impl Survey {
                 speed_mps: speed,
                 start_time_s: t,
                 sway: sway.as_ref().map(|cfg| Sway::new(cfg, seed, index)),
+                nav_errors: LineErrors::default(),
             };
             t += line.duration_s() + turn_time_s;
-            lines.push(line);
+            let nav_errors = LineErrors::new(&navigation, seed, index, line.duration_s());
+            lines.push(FlightLine { nav_errors, ..line });
         }
 
         // [output]
@@ -1175,6 +1364,7 @@ impl Survey {
             turn_time_s,
             lines,
             canopy,
+            navigation,
             forest_trees,
             warnings,
             output: OutputSettings {

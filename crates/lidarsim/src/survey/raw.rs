@@ -17,6 +17,9 @@ pub struct RawSurvey {
     /// Seed of all random streams.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+    /// Navigation error preset for GNSS and IMU (`"survey-grade"`, `"uav"`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preset: Option<String>,
     /// `[scanner]`.
     #[serde(default)]
     pub scanner: RawScanner,
@@ -41,6 +44,18 @@ pub struct RawSurvey {
     /// `[[mesh]]`.
     #[serde(default, rename = "mesh", skip_serializing_if = "Vec::is_empty")]
     pub meshes: Vec<RawMesh>,
+    /// `[gnss]`: position errors of the observed trajectory.
+    #[serde(default, skip_serializing_if = "RawErrors::is_empty")]
+    pub gnss: RawErrors,
+    /// `[imu]`: attitude errors of the observed trajectory.
+    #[serde(default, skip_serializing_if = "RawErrors::is_empty")]
+    pub imu: RawErrors,
+    /// `[boresight]`: scanner misalignment and lever-arm error.
+    #[serde(default, skip_serializing_if = "RawBoresight::is_empty")]
+    pub boresight: RawBoresight,
+    /// `[ranging]`: measurement noise.
+    #[serde(default, skip_serializing_if = "RawRanging::is_empty")]
+    pub ranging: RawRanging,
     /// `[vegetation]`: how sub-rays march through crowns.
     #[serde(default)]
     pub vegetation: RawVegetation,
@@ -261,4 +276,87 @@ pub struct RawForest {
     pub min_spacing_m: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
+}
+
+/// `[gnss]` (metres) or `[imu]` (degrees). A number for `sigma_*` and
+/// `random_walk_*` applies to all three axes; a list gives them per axis.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawErrors {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub preset: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bias_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma_m: Option<NumberOrList>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub random_walk_m: Option<NumberOrList>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bias_deg: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma_deg: Option<NumberOrList>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub random_walk_deg: Option<NumberOrList>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub correlation_time_s: Option<f64>,
+}
+
+impl RawErrors {
+    /// True when no key is set.
+    pub fn is_empty(&self) -> bool {
+        self.preset.is_none()
+            && self.bias_m.is_none()
+            && self.sigma_m.is_none()
+            && self.random_walk_m.is_none()
+            && self.bias_deg.is_none()
+            && self.sigma_deg.is_none()
+            && self.random_walk_deg.is_none()
+            && self.correlation_time_s.is_none()
+    }
+}
+
+/// One number for all axes, or one per axis.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(untagged)]
+#[allow(missing_docs)]
+pub enum NumberOrList {
+    Number(f64),
+    List(Vec<f64>),
+}
+
+/// `[boresight]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawBoresight {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub angles_deg: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub lever_arm_m: Option<Vec<f64>>,
+}
+
+impl RawBoresight {
+    /// True when no key is set.
+    pub fn is_empty(&self) -> bool {
+        self.angles_deg.is_none() && self.lever_arm_m.is_none()
+    }
+}
+
+/// `[ranging]`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawRanging {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sigma_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub encoder_sigma_deg: Option<f64>,
+}
+
+impl RawRanging {
+    /// True when no key is set.
+    pub fn is_empty(&self) -> bool {
+        self.sigma_m.is_none() && self.encoder_sigma_deg.is_none()
+    }
 }
