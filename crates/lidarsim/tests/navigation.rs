@@ -219,3 +219,163 @@ fn boresight_error_shows_as_a_strip_discrepancy_on_a_roof() {
     }
     assert!((west[0] - west[1]) * (east[0] - east[1]) < 0.0);
 }
+
+fn run_dir(s: &Survey, name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("lidarsim-nav-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    lidarsim::run::run_to_dir(
+        s,
+        &dir,
+        &lidarsim::run::RunOptions {
+            threads: 2,
+            progress: &|_| {},
+        },
+    )
+    .unwrap();
+    dir
+}
+
+#[test]
+fn a_written_trajectory_flies_again_the_same() {
+    // Fly two swaying lines, then fly the trajectory file they wrote: the
+    // 1 ms samples, slerped, reproduce the points within a millimetre.
+    let lines = format!(
+        "[platform]\nsway = true\nroll_amplitude_deg = 1.0\nturn_time_s = 5\n\
+         [[flight_line]]\nstart_m = [0.0, -20.0, {H}]\nend_m = [0.0, 20.0, {H}]\nspeed_mps = 50.0\n\
+         [[flight_line]]\nstart_m = [30.0, 20.0, {H}]\nend_m = [30.0, -20.0, {H}]\nspeed_mps = 50.0\n"
+    );
+    let ground = "[materials.grass]\nreflectance = 0.4\n[[polygon]]\nmaterial = \"grass\"\n\
+                  class = \"ground\"\nvertices_m = [[-900, -900, 0], [900, -900, 0], [900, 900, 0], [-900, 900, 0]]\n";
+    let scanner = "[scanner]\nprf_hz = 20000\nscan_angle_deg = 20\nsubrays = 1\n";
+    let a = Survey::from_toml(&format!("seed = 4\n{scanner}{lines}{ground}"), None).unwrap();
+    let dir = run_dir(&a, "traj");
+    let traj = dir.join("trajectory_true.csv");
+    let text = format!(
+        "seed = 4\n{scanner}[platform]\ntrajectory_file = \"{}\"\ninterpolation = \"spline\"\n{ground}",
+        traj.display()
+    );
+    let b = Survey::from_toml(&text, None).unwrap();
+    assert_eq!(b.lines.len(), 2);
+    assert!((b.lines[1].start_time_s - a.lines[1].start_time_s).abs() < 1e-9);
+    let (pa, pb) = (simulate(&a), simulate(&b));
+    // The file ends at the last whole millisecond: compare the pulses both
+    // flights emitted.
+    assert!(pb.len() as f64 > 0.99 * pa.len() as f64);
+    let mut compared = 0;
+    for q in &pb {
+        let p = pa
+            .iter()
+            .find(|p| p.point_source_id == q.point_source_id && p.pulse_index == q.pulse_index)
+            .unwrap();
+        assert!((p.position_m - q.position_m).length() < 1e-3);
+        compared += 1;
+        if compared > 2000 {
+            break;
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn observed_trajectory_file_carries_the_bias() {
+    let s = survey(
+        "[gnss]\nbias_m = [0.0, 0.0, 0.4]\n[imu]\nbias_deg = [0.1, 0.0, 0.0]",
+        "",
+    );
+    let dir = run_dir(&s, "obs");
+    let read = |name: &str| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(dir.join(name))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|c| c.parse().unwrap()).collect())
+            .collect()
+    };
+    let (t, o) = (read("trajectory_true.csv"), read("trajectory_observed.csv"));
+    assert_eq!(t.len(), o.len());
+    for (a, b) in t.iter().zip(&o) {
+        assert!((b[3] - a[3] - 0.4).abs() < 1e-4); // z
+        assert!((b[4] - a[4] - 0.1).abs() < 1e-6); // roll, degrees
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_plan_covers_its_area_with_the_requested_overlap() {
+    let text = r#"
+[scanner]
+prf_hz = 10000
+scan_angle_deg = 20
+subrays = 1
+[plan]
+rectangle_m = [0.0, 0.0, 800.0, 300.0]
+altitude_m = 400.0
+heading_deg = 90.0
+side_overlap = 0.3
+speed_mps = 70.0
+run_in_m = 50.0
+[materials.grass]
+reflectance = 0.4
+[[polygon]]
+material = "grass"
+class = "ground"
+vertices_m = [[-900, -900, 20], [900, -900, 20], [900, 900, 20], [-900, 900, 20]]
+"#;
+    let s = Survey::from_toml(text, None).unwrap();
+    // Eastbound (compass 90°) lines spaced W·(1 − 0.3), W = 2·400·tan 20°,
+    // over the 300 m north–south extent, 400 m above the ground at z = 20.
+    let w = 2.0 * 400.0 * 20f64.to_radians().tan();
+    let n = (300.0 / (w * 0.7)).ceil() as usize;
+    assert_eq!(s.lines.len(), n);
+    for (k, l) in s.lines.iter().enumerate() {
+        assert!((l.start_m.z - 420.0).abs() < 1e-9);
+        assert!((l.length_m() - 900.0).abs() < 1e-6);
+        let east = l.end_m.x > l.start_m.x;
+        assert_eq!(east, k % 2 == 0, "back and forth");
+    }
+    let spacing = (s.lines[1].start_m.y - s.lines[0].start_m.y).abs();
+    assert!((spacing - 0.7 * w).abs() < 1e-6);
+}
+
+#[test]
+fn presets_and_key_errors() {
+    let s = survey("preset = \"survey-grade\"", "");
+    assert!(s.navigation.gnss.random_walk[2] > 0.0 && s.navigation.imu.sigma[0] > 0.0);
+    let uav = survey("[gnss]\npreset = \"uav\"", "");
+    assert!(uav.navigation.gnss.random_walk[0] >= 1.0 && uav.navigation.imu.is_zero());
+    let bad = |extra: &str| {
+        let text = format!(
+            "{extra}\n[[flight_line]]\nstart_m = [0, 0, 100]\nend_m = [0, 10, 100]\nspeed_mps = 5\n\
+             [materials.a]\nreflectance = 0.2\n[[polygon]]\nmaterial = \"a\"\n\
+             vertices_m = [[-9, -9, 0], [9, -9, 0], [9, 9, 0]]\n"
+        );
+        Survey::from_toml(&text, None).unwrap_err().diagnostics[0]
+            .key
+            .clone()
+    };
+    assert_eq!(bad("preset = \"military\""), "preset");
+    assert_eq!(bad("[gnss]\nsigma_deg = 0.1"), "gnss.sigma_deg");
+    assert_eq!(bad("[imu]\nbias_deg = [1, 2]"), "imu.bias_deg");
+    assert_eq!(
+        bad("[boresight]\nlever_arm_m = [0.1]"),
+        "boresight.lever_arm_m"
+    );
+    assert_eq!(bad("[ranging]\nsigma_m = -1"), "ranging.sigma_m");
+    assert_eq!(bad("[platform]\ndrift_m = [1]"), "platform.drift_m");
+}
+
+#[test]
+fn drift_moves_the_flown_path_but_not_the_georeferencing() {
+    // Drift is real motion (true and observed alike): points stay on the
+    // ground plane while the swath wanders.
+    let s = survey("[platform]\ndrift_m = [5.0, 3.0]\ndrift_period_s = 2.0", "");
+    let pts = simulate(&s);
+    assert!(pts.iter().all(|p| p.position_m.z.abs() < 0.01));
+    let plain = simulate(&survey("", ""));
+    let moved = pts
+        .iter()
+        .zip(&plain)
+        .filter(|(a, b)| (a.position_m.x - b.position_m.x).abs() > 0.5)
+        .count();
+    assert!(moved > pts.len() / 2);
+}

@@ -20,7 +20,7 @@ use crate::canopy::CanopyConfig;
 use crate::detection::DetectorConfig;
 use crate::geometry::DVec3;
 use crate::navigation::{ErrorModel, LineErrors, NavigationErrors};
-use crate::platform::{FlightLine, Sway, SwayConfig};
+use crate::platform::{Drift, FlightLine, Interpolation, Sway, SwayConfig, Track, plan_lines};
 use crate::scanner::{Mirror, MirrorProfile};
 use crate::scene::forest::{ForestSpec, generate};
 use crate::scene::{
@@ -444,6 +444,236 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
             "°",
         ) * deg,
     }
+}
+
+/// Validates `[plan]` and generates its lines.
+fn check_plan(
+    c: &mut Checker,
+    plan: &raw::RawPlan,
+    scene: &Scene,
+    scan_half_angle_rad: f64,
+) -> Vec<(DVec3, DVec3, f64)> {
+    let pp = KeyPath::root().key("plan");
+    let area = match (&plan.rectangle_m, &plan.area_m) {
+        (Some(r), None)
+            if r.len() == 4 && r.iter().all(|v| v.is_finite()) && r[2] > r[0] && r[3] > r[1] =>
+        {
+            Some(vec![[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]])
+        }
+        (Some(_), None) => {
+            c.err(
+                pp.key("rectangle_m"),
+                "must be [x_min, y_min, x_max, y_max]",
+            );
+            None
+        }
+        (None, Some(a))
+            if a.len() >= 3
+                && a.iter()
+                    .all(|p| p.len() == 2 && p.iter().all(|v| v.is_finite())) =>
+        {
+            Some(a.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>())
+        }
+        (None, Some(_)) => {
+            c.err(
+                pp.key("area_m"),
+                "must be a list of at least 3 [x, y] points",
+            );
+            None
+        }
+        _ => {
+            c.err(pp.clone(), "needs exactly one of rectangle_m or area_m");
+            None
+        }
+    };
+    if plan.altitude_m.is_none() {
+        c.err(
+            pp.key("altitude_m"),
+            "is required: flying height above the ground in metres",
+        );
+    }
+    let altitude = c.positive(pp.key("altitude_m"), plan.altitude_m, 500.0, " m");
+    let heading = c.number(
+        pp.key("heading_deg"),
+        plan.heading_deg,
+        0.0,
+        -360.0,
+        false,
+        360.0,
+        "°",
+    );
+    let speed = c.positive(pp.key("speed_mps"), plan.speed_mps, 60.0, " m/s");
+    let run_in = c.number(
+        pp.key("run_in_m"),
+        plan.run_in_m,
+        0.0,
+        0.0,
+        false,
+        1e5,
+        " m",
+    );
+    let swath = 2.0 * altitude * scan_half_angle_rad.tan();
+    let spacing = match (plan.line_spacing_m, plan.side_overlap) {
+        (Some(s), None) => c.positive(pp.key("line_spacing_m"), Some(s), 100.0, " m"),
+        (None, Some(o)) => {
+            let o = c.number(pp.key("side_overlap"), Some(o), 0.2, 0.0, false, 0.95, "");
+            swath * (1.0 - o)
+        }
+        (None, None) => swath * 0.8,
+        (Some(_), Some(_)) => {
+            c.err(
+                pp.key("side_overlap"),
+                "give line_spacing_m or side_overlap, not both",
+            );
+            swath
+        }
+    };
+    let Some(area) = area else { return Vec::new() };
+    if spacing <= 0.0 {
+        c.err(
+            pp.key("side_overlap"),
+            "the scan angle gives no swath to space lines by",
+        );
+        return Vec::new();
+    }
+    // Flying height above the ground at the area's centre.
+    let n = area.len() as f64;
+    let (cx, cy) = (
+        area.iter().map(|p| p[0]).sum::<f64>() / n,
+        area.iter().map(|p| p[1]).sum::<f64>() / n,
+    );
+    let ground = crate::plan::ground_below(
+        &crate::accel::Bvh::build(scene.clone()),
+        DVec3::new(cx, cy, 1e6),
+    );
+    // Compass heading (clockwise from north) → yaw (counter-clockwise).
+    plan_lines(
+        &area,
+        -heading.to_radians(),
+        spacing,
+        run_in,
+        ground + altitude,
+    )
+    .into_iter()
+    .map(|(s, e)| (s, e, speed))
+    .collect()
+}
+
+/// Reads a trajectory file: CSV with a header naming the columns `time_s`
+/// (or `gps_time_s`), `x_m`, `y_m`, `z_m`, `roll_deg`, `pitch_deg`,
+/// `yaw_deg` and optionally `line` (the format lidarsim writes). Rows of one
+/// `line` value form one flight line; times are seconds, the first row is
+/// the start of the flight. Returns each line's start time and track.
+pub fn read_trajectory(
+    path: &Path,
+    interpolation: Interpolation,
+) -> Result<Vec<(f64, Track)>, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("cannot read trajectory file '{}': {e}", path.display()))?;
+    let mut rows = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty());
+    let Some((_, header)) = rows.next() else {
+        return Err(format!("'{}' is empty", path.display()));
+    };
+    let names: Vec<&str> = header.split(',').map(str::trim).collect();
+    let col = |want: &[&str]| names.iter().position(|n| want.contains(n));
+    let need = [
+        col(&["time_s", "gps_time_s", "time"]),
+        col(&["x_m", "x"]),
+        col(&["y_m", "y"]),
+        col(&["z_m", "z"]),
+        col(&["roll_deg", "roll"]),
+        col(&["pitch_deg", "pitch"]),
+        col(&["yaw_deg", "yaw"]),
+    ];
+    let wanted = [
+        "time_s",
+        "x_m",
+        "y_m",
+        "z_m",
+        "roll_deg",
+        "pitch_deg",
+        "yaw_deg",
+    ];
+    let mut idx = [0usize; 7];
+    for (k, c) in need.iter().enumerate() {
+        match c {
+            Some(i) => idx[k] = *i,
+            None => {
+                return Err(format!(
+                    "'{}' line 1: no column `{}` (the header must name: {})",
+                    path.display(),
+                    wanted[k],
+                    wanted.join(", ")
+                ));
+            }
+        }
+    }
+    let line_col = col(&["line"]);
+    let mut segments: Vec<(String, Vec<(f64, DVec3, crate::geometry::Attitude)>)> = Vec::new();
+    for (n, row) in rows {
+        let cells: Vec<&str> = row.split(',').map(str::trim).collect();
+        let value = |k: usize| -> Result<f64, String> {
+            let cell = cells.get(idx[k]).copied().unwrap_or("");
+            cell.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    format!(
+                        "'{}' line {}: `{}` is '{cell}', not a number",
+                        path.display(),
+                        n + 1,
+                        wanted[k]
+                    )
+                })
+        };
+        let v: Vec<f64> = (0..7).map(value).collect::<Result<_, _>>()?;
+        let key = line_col
+            .and_then(|i| cells.get(i))
+            .map_or_else(String::new, |s| s.to_string());
+        let sample = (
+            v[0],
+            DVec3::new(v[1], v[2], v[3]),
+            crate::geometry::Attitude {
+                roll_rad: v[4].to_radians(),
+                pitch_rad: v[5].to_radians(),
+                yaw_rad: v[6].to_radians(),
+            },
+        );
+        match segments.last_mut() {
+            Some((k, samples)) if *k == key => {
+                if sample.0 <= samples[samples.len() - 1].0 {
+                    return Err(format!(
+                        "'{}' line {}: times must increase",
+                        path.display(),
+                        n + 1
+                    ));
+                }
+                samples.push(sample);
+            }
+            _ => segments.push((key, vec![sample])),
+        }
+    }
+    let t0 = segments
+        .first()
+        .map(|s| s.1[0].0)
+        .ok_or_else(|| format!("'{}' holds no trajectory rows", path.display()))?;
+    segments
+        .into_iter()
+        .map(|(key, samples)| {
+            let start = samples[0].0 - t0;
+            Track::new(&samples, interpolation)
+                .map(|t| (start, t))
+                .ok_or_else(|| {
+                    format!(
+                        "'{}': line '{key}' needs at least two rows with increasing times",
+                        path.display()
+                    )
+                })
+        })
+        .collect()
 }
 
 /// Shortest tree accepted, m (the trunk tapers from breast height, 1.3 m,
@@ -993,15 +1223,9 @@ impl Survey {
         // Navigation errors: preset first, then the tables' own keys.
         let navigation = check_navigation(&mut c, &raw);
 
-        // [[flight_line]]
-        let mut lines = Vec::new();
-        if raw.flight_lines.is_empty() {
-            c.err(
-                root.key("flight_line"),
-                "the survey needs at least one [[flight_line]] with start_m, end_m and speed_mps",
-            );
-        }
-        let mut t = 0.0;
+        // [[flight_line]]: straight lines as given (timed further down, once
+        // plans and trajectory files are known).
+        let mut straight: Vec<(DVec3, DVec3, f64)> = Vec::new();
         for (i, l) in raw.flight_lines.iter().enumerate() {
             let lp = root.key("flight_line").index(i);
             let start = c.point(lp.key("start_m"), &l.start_m);
@@ -1027,20 +1251,22 @@ impl Survey {
                 );
                 continue;
             }
-            let index = lines.len() as u32;
-            let line = FlightLine {
-                index,
-                start_m: start,
-                end_m: end,
-                speed_mps: speed,
-                start_time_s: t,
-                sway: sway.as_ref().map(|cfg| Sway::new(cfg, seed, index)),
-                nav_errors: LineErrors::default(),
-            };
-            t += line.duration_s() + turn_time_s;
-            let nav_errors = LineErrors::new(&navigation, seed, index, line.duration_s());
-            lines.push(FlightLine { nav_errors, ..line });
+            straight.push((start, end, speed));
         }
+        let drift = match &p.drift_m {
+            None => None,
+            Some(d) if d.len() == 2 && d.iter().all(|x| x.is_finite() && *x >= 0.0) => {
+                Some([d[0], d[1]])
+            }
+            Some(_) => {
+                c.err(
+                    pp.key("drift_m"),
+                    "must be [lateral, vertical] peak drift in metres, both at least 0",
+                );
+                None
+            }
+        };
+        let drift_period_s = c.positive(pp.key("drift_period_s"), p.drift_period_s, 30.0, " s");
 
         // [output]
         let o = &raw.output;
@@ -1318,6 +1544,93 @@ impl Survey {
                     scene.add_tree(tree, whorl, format!("forest[{i}].tree[{j}]"));
                 }
             }
+        }
+
+        // Flight lines: [[flight_line]], a [plan] or a trajectory file.
+        let sources = usize::from(!raw.flight_lines.is_empty())
+            + usize::from(raw.plan.is_some())
+            + usize::from(p.trajectory_file.is_some());
+        if sources == 0 {
+            c.err(
+                root.key("flight_line"),
+                "the survey needs flight lines: [[flight_line]] entries, a [plan] or \
+                 platform.trajectory_file",
+            );
+        } else if sources > 1 {
+            c.err(
+                root.key("plan"),
+                "give flight lines one way only: [[flight_line]], [plan] or \
+                 platform.trajectory_file",
+            );
+        }
+        if let Some(plan) = &raw.plan {
+            straight.extend(check_plan(
+                &mut c,
+                plan,
+                &scene,
+                scan_angle_deg.to_radians(),
+            ));
+        }
+        let tracks = match &p.trajectory_file {
+            None => Vec::new(),
+            Some(file) => {
+                let interpolation = match p.interpolation.as_deref() {
+                    None | Some("linear") => Interpolation::Linear,
+                    Some("spline") => Interpolation::Spline,
+                    Some(other) => {
+                        c.err(
+                            pp.key("interpolation"),
+                            format!(
+                                "unknown interpolation '{other}'; expected \"linear\" or \"spline\""
+                            ),
+                        );
+                        Interpolation::Linear
+                    }
+                };
+                let full = base.join(file);
+                match read_trajectory(&full, interpolation) {
+                    Ok(t) => t,
+                    Err(e) => {
+                        c.err(pp.key("trajectory_file"), e);
+                        Vec::new()
+                    }
+                }
+            }
+        };
+        let mut lines = Vec::new();
+        let mut t = 0.0;
+        for (start, end, speed) in straight {
+            let index = lines.len() as u32;
+            let line = FlightLine {
+                index,
+                start_m: start,
+                end_m: end,
+                speed_mps: speed,
+                start_time_s: t,
+                sway: sway.as_ref().map(|cfg| Sway::new(cfg, seed, index)),
+                nav_errors: LineErrors::default(),
+                drift: drift.map(|d| Drift::new(d, drift_period_s, seed, index)),
+                track: None,
+            };
+            t += line.duration_s() + turn_time_s;
+            let nav_errors = LineErrors::new(&navigation, seed, index, line.duration_s());
+            lines.push(FlightLine { nav_errors, ..line });
+        }
+        for (start_time_s, track) in tracks {
+            let index = lines.len() as u32;
+            let (start_m, end_m) = track.ends();
+            let duration = track.duration_s();
+            lines.push(FlightLine {
+                index,
+                start_m,
+                end_m,
+                speed_mps: track.length_m().max(1e-9) / duration,
+                start_time_s,
+                sway: None,
+                nav_errors: LineErrors::new(&navigation, seed, index, duration),
+                drift: None,
+                track: Some(std::sync::Arc::new(track)),
+            });
         }
 
         if scene.primitives.is_empty() && c.problems.is_empty() {

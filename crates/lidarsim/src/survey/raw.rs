@@ -35,6 +35,9 @@ pub struct RawSurvey {
     /// `[[flight_line]]`.
     #[serde(default, rename = "flight_line")]
     pub flight_lines: Vec<RawFlightLine>,
+    /// `[plan]`: flight lines generated over an area.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub plan: Option<RawPlan>,
     /// `[materials.NAME]`.
     #[serde(default)]
     pub materials: BTreeMap<String, RawMaterial>,
@@ -130,6 +133,14 @@ pub struct RawReceiver {
 pub struct RawPlatform {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sway: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub drift_period_s: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trajectory_file: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interpolation: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub roll_amplitude_deg: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -359,4 +370,27 @@ impl RawRanging {
     pub fn is_empty(&self) -> bool {
         self.sigma_m.is_none() && self.encoder_sigma_deg.is_none()
     }
+}
+
+/// `[plan]`: parallel flight lines over an area.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawPlan {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rectangle_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub area_m: Option<Vec<Vec<f64>>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub altitude_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub heading_deg: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub line_spacing_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub side_overlap: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub speed_mps: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub run_in_m: Option<f64>,
 }
