@@ -559,6 +559,9 @@ fn check_plan(
     .collect()
 }
 
+/// One row of a trajectory file: time, position, attitude.
+type TrackSample = (f64, DVec3, crate::geometry::Attitude);
+
 /// Reads a trajectory file: CSV with a header naming the columns `time_s`
 /// (or `gps_time_s`), `x_m`, `y_m`, `z_m`, `roll_deg`, `pitch_deg`,
 /// `yaw_deg` and optionally `line` (the format lidarsim writes). Rows of one
@@ -612,7 +615,8 @@ pub fn read_trajectory(
         }
     }
     let line_col = col(&["line"]);
-    let mut segments: Vec<(String, Vec<(f64, DVec3, crate::geometry::Attitude)>)> = Vec::new();
+    // Consecutive rows of one `line` value, as (line value, samples).
+    let mut segments: Vec<(String, Vec<TrackSample>)> = Vec::new();
     for (n, row) in rows {
         let cells: Vec<&str> = row.split(',').map(str::trim).collect();
         let value = |k: usize| -> Result<f64, String> {
