@@ -16,3 +16,8 @@ out=target/demo-check
 rm -rf "$out"
 cargo run --release --quiet -- demo -o "$out"
 "$venv/bin/python" scripts/check_las.py "$out"
+
+# The error vector as LAS extra bytes, read by laspy.
+rm -rf target/extra-bytes-check
+cargo run --release --quiet -- run scripts/fixtures/gnss-bias.toml -o target/extra-bytes-check > /dev/null
+"$venv/bin/python" scripts/check_extra_bytes.py target/extra-bytes-check
