@@ -52,11 +52,16 @@ fn pairs(extra: &str) -> Vec<(PointRecord, PointRecord)> {
 
 #[test]
 fn gnss_bias_shifts_the_cloud_by_the_bias() {
+    let mut worst = 0.0f64;
     for (t, e) in pairs("[gnss]\nbias_m = [0.3, -0.2, 0.15]") {
         let d = e.position_m - t.position_m;
+        worst = worst.max((d - lidarsim::geometry::DVec3::new(0.3, -0.2, 0.15)).length());
         assert!((d.x - 0.3).abs() < 1e-3 && (d.y + 0.2).abs() < 1e-3 && (d.z - 0.15).abs() < 1e-3);
         assert!((e.error_m - d).length() < 1e-9, "error vector = the shift");
     }
+    eprintln!(
+        "figure: GNSS bias (0.3, -0.2, 0.15) m: largest deviation of the shift {worst:.2e} m"
+    );
 }
 
 #[test]
@@ -84,13 +89,27 @@ fn roll_bias_tilts_the_cloud_across_track() {
     // The level ground comes out as a plane tilted by δ across track
     // (rotated about the sensor: the right side comes out lower).
     let slope = (n * sxz - sx * sz) / (n * sxx - sx * sx);
+    eprintln!(
+        "figure: roll bias 0.2°: fitted across-track slope {slope:.6} (−tan δ = {:.6})",
+        -delta.tan()
+    );
     assert!((slope + delta.tan()).abs() < 0.01 * delta.tan(), "{slope}");
 }
 
 #[test]
 fn pitch_bias_shifts_along_track() {
     let delta = 0.1f64.to_radians();
-    for (t, e) in pairs("[imu]\nbias_deg = [0.0, 0.1, 0.0]") {
+    let p = pairs("[imu]\nbias_deg = [0.0, 0.1, 0.0]");
+    let mean = p
+        .iter()
+        .map(|(t, e)| e.position_m.y - t.position_m.y)
+        .sum::<f64>()
+        / p.len() as f64;
+    eprintln!(
+        "figure: pitch bias 0.1°: mean along-track shift {mean:.4} m (H tan δ = {:.4} m)",
+        H * delta.tan()
+    );
+    for (t, e) in p {
         let dy = e.position_m.y - t.position_m.y;
         // Nose up turns the beam forwards: Δy = H sin δ exactly for a level
         // plane below, ≈ H tan δ.
@@ -112,6 +131,7 @@ fn rms_dz(extra: &str) -> f64 {
 fn white_noise_propagates_to_the_heights() {
     // GNSS height noise goes straight into the heights.
     let got = rms_dz("[gnss]\nsigma_m = [0.0, 0.0, 0.05]");
+    eprintln!("figure: GNSS height noise 0.05 m: RMS height error {got:.4} m");
     assert!((got - 0.05).abs() < 0.1 * 0.05, "{got}");
     // Roll noise ε moves a point at angle α by R(cos α − cos(α − ε)) ≈
     // H tan α · ε vertically: RMS = H σ √(mean tan² α) over the swath.
@@ -125,6 +145,7 @@ fn white_noise_propagates_to_the_heights() {
         / pts.len() as f64;
     let want = H * sigma * mean_tan2.sqrt();
     let got = rms_dz("[imu]\nsigma_deg = [0.01, 0.0, 0.0]");
+    eprintln!("figure: roll noise 0.01°: RMS height error {got:.4} m (propagated {want:.4} m)");
     assert!((got - want).abs() < 0.1 * want, "{got} vs {want}");
     // Ranging noise: a range error moves the point along the beam,
     // vertically by σ cos α.
@@ -135,6 +156,7 @@ fn white_noise_propagates_to_the_heights() {
         .sum::<f64>()
         / pts.len() as f64;
     let want = 0.03 * mean_cos2.sqrt();
+    eprintln!("figure: range noise 0.03 m: RMS height error {got:.4} m (propagated {want:.4} m)");
     assert!((got - want).abs() < 0.1 * want, "{got} vs {want}");
 }
 
@@ -202,6 +224,7 @@ vertices_m = [[-500, -500, 0], [500, -500, 0], [500, 500, 0], [-500, 500, 0]]
 #[test]
 fn boresight_error_shows_as_a_strip_discrepancy_on_a_roof() {
     for [a, b] in roof_residuals("") {
+        eprintln!("figure: no boresight error: roof residuals per strip {a:.4} / {b:.4} m");
         assert!((a - b).abs() < 0.005, "no boresight: {a} vs {b}");
         assert!(a.abs() < 0.005 && b.abs() < 0.005);
     }
@@ -212,6 +235,11 @@ fn boresight_error_shows_as_a_strip_discrepancy_on_a_roof() {
     let [west, east] = roof_residuals("[boresight]\nangles_deg = [0.05, 0.0, 0.0]");
     let expected = 0.6 * 2.0 * H * 0.05f64.to_radians();
     for (name, [a, b]) in [("west", west), ("east", east)] {
+        eprintln!(
+            "figure: boresight roll 0.05°, {name} roof plane: strips {a:.3} / {b:.3} m, \
+             discrepancy {:.3} m (expected {expected:.3} m)",
+            (a - b).abs()
+        );
         assert!(
             ((a - b).abs() - expected).abs() < 0.15 * expected,
             "{name}: {a} vs {b}"
