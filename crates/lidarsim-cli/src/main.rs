@@ -15,6 +15,13 @@ use lidarsim::accel::Bvh;
 use lidarsim::plan::plan;
 use lidarsim::run::{RunOptions, Summary, run_to_dir};
 
+/// Prints a line to standard output, ignoring a closed pipe (`| head`).
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
 #[derive(Parser)]
 #[command(
     name = "lidarsim",
@@ -62,6 +69,23 @@ enum Command {
         /// The survey (TOML).
         survey: PathBuf,
     },
+    /// Render a LAS file (ours or anyone's) as a top view or a cross-section PNG.
+    Render {
+        /// The point cloud (LAS).
+        cloud: PathBuf,
+        /// Output PNG.
+        #[arg(short, long, default_value = "top.png")]
+        output: PathBuf,
+        /// Colours: height, intensity, class, return or strip.
+        #[arg(long, default_value = "height")]
+        color: String,
+        /// Pixel size, m (default: from the point density).
+        #[arg(long)]
+        resolution: Option<f64>,
+        /// Cross-section instead of top view: x0,y0,x1,y1,width (m).
+        #[arg(long, value_name = "X0,Y0,X1,Y1,WIDTH", allow_hyphen_values = true)]
+        profile: Option<String>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -108,6 +132,19 @@ fn main() -> ExitCode {
             Ok(s) => simulate(s, &output, threads),
             Err(e) => fail_survey(&e),
         },
+        Command::Render {
+            cloud,
+            output,
+            color,
+            resolution,
+            profile,
+        } => match render(&cloud, &output, &color, resolution, profile.as_deref()) {
+            Ok(()) => {
+                say!("wrote {}", output.display());
+                ExitCode::SUCCESS
+            }
+            Err((code, msg)) => fail(code, &msg),
+        },
         Command::Check { survey } => match Survey::load(&survey) {
             Ok(s) => {
                 warn(&s);
@@ -117,13 +154,6 @@ fn main() -> ExitCode {
             Err(e) => fail_survey(&e),
         },
     }
-}
-
-/// Prints a line to standard output, ignoring a closed pipe (`| head`).
-macro_rules! say {
-    ($($arg:tt)*) => {{
-        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
-    }};
 }
 
 fn fail(code: u8, message: &str) -> ExitCode {
@@ -186,6 +216,77 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>) -> ExitCode {
         }
         Err(e) => fail(1, &e.to_string()),
     }
+}
+
+/// Reads a LAS file and writes a top view or profile PNG. Errors carry the
+/// exit status: 2 for bad arguments, 1 for unreadable or unwritable files.
+fn render(
+    cloud: &Path,
+    output: &Path,
+    color: &str,
+    resolution: Option<f64>,
+    profile: Option<&str>,
+) -> Result<(), (u8, String)> {
+    use lidarsim::render::{ColorBy, RenderPoint};
+    let by = ColorBy::from_name(color).ok_or_else(|| {
+        (
+            2,
+            format!("--color {color}: expected height, intensity, class, return or strip"),
+        )
+    })?;
+    if resolution.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
+        return Err((2, "--resolution must be a positive number of metres".into()));
+    }
+    let section = match profile {
+        None => None,
+        Some(p) => {
+            let v: Vec<f64> = p
+                .split(',')
+                .map(|s| s.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| {
+                    (
+                        2,
+                        format!("--profile {p}: expected five numbers x0,y0,x1,y1,width"),
+                    )
+                })?;
+            if v.len() != 5 || v[4] <= 0.0 || v.iter().any(|x| !x.is_finite()) {
+                return Err((
+                    2,
+                    format!("--profile {p}: expected x0,y0,x1,y1,width with width > 0"),
+                ));
+            }
+            Some(v)
+        }
+    };
+    let bad = |e: las::Error| (1, format!("{}: {e}", cloud.display()));
+    let mut reader = las::Reader::from_path(cloud).map_err(bad)?;
+    let points: Vec<RenderPoint> = reader
+        .read_all()
+        .map_err(bad)?
+        .points()
+        .map(|p| {
+            p.map(|p| RenderPoint {
+                x: p.x,
+                y: p.y,
+                z: p.z,
+                intensity: p.intensity,
+                classification: u8::from(p.classification),
+                return_number: p.return_number,
+                number_of_returns: p.number_of_returns,
+                source: p.point_source_id,
+            })
+        })
+        .collect::<Result<_, _>>()
+        .map_err(bad)?;
+    let img = match section {
+        None => lidarsim::render::top_view(&points, by, resolution),
+        Some(v) => {
+            lidarsim::render::profile(&points, (v[0], v[1]), (v[2], v[3]), v[4], by, resolution)
+        }
+    };
+    img.save_png(output)
+        .map_err(|e| (1, format!("{}: {e}", output.display())))
 }
 
 fn report(s: &Summary, output: &Path) {

@@ -317,3 +317,50 @@ fn one_and_two_threads_write_identical_files() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn render_writes_top_views_and_profiles_and_rejects_bad_options() {
+    let dir = temp("render");
+    let (o, out) = run_survey(&dir, GOOD);
+    assert!(o.status.success());
+    let las = out.join("points.las");
+    for (color, extra) in [
+        ("class", None),
+        ("height", None),
+        ("strip", Some("-20,0,20,0,2")),
+    ] {
+        let png = dir.join(format!("{color}.png"));
+        let mut cmd = bin();
+        cmd.arg("render")
+            .arg(&las)
+            .arg("-o")
+            .arg(&png)
+            .args(["--color", color]);
+        if let Some(p) = extra {
+            cmd.args(["--profile", p]);
+        }
+        let o = cmd.output().unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let bytes = std::fs::read(&png).unwrap();
+        assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    }
+    for bad in [
+        vec!["--color", "rainbow"],
+        vec!["--profile", "1,2,3"],
+        vec!["--resolution", "-1"],
+    ] {
+        let o = bin()
+            .arg("render")
+            .arg(&las)
+            .args(["-o"])
+            .arg(dir.join("x.png"))
+            .args(&bad)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{bad:?}");
+        assert!(!String::from_utf8_lossy(&o.stderr).contains("panicked"));
+    }
+    let o = bin().args(["render", "/nonexistent.las"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    std::fs::remove_dir_all(&dir).ok();
+}

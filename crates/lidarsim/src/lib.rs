@@ -58,6 +58,7 @@ pub mod output;
 pub mod plan;
 pub mod platform;
 pub mod radiometry;
+pub mod render;
 pub mod rng;
 pub mod run;
 pub mod scanner;

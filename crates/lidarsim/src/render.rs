@@ -1,0 +1,710 @@
+//! Pictures of point clouds without system libraries: top views and
+//! cross-sections rendered to RGB rasters and PNG files, with a legend or
+//! colour bar and a scale bar (specification: "Ultimately the output is
+//! visual").
+
+use std::io;
+use std::path::Path;
+
+/// The attributes a picture can show of a point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderPoint {
+    /// Position, m.
+    pub x: f64,
+    /// Position, m.
+    pub y: f64,
+    /// Height, m.
+    pub z: f64,
+    /// LAS intensity.
+    pub intensity: u16,
+    /// ASPRS class.
+    pub classification: u8,
+    /// Return number (1-based).
+    pub return_number: u8,
+    /// Number of returns of the pulse.
+    pub number_of_returns: u8,
+    /// Point source ID (flight line).
+    pub source: u16,
+}
+
+/// What the colours show.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ColorBy {
+    /// Height, on a colour bar from the 2nd to the 98th percentile.
+    Height,
+    /// Intensity, likewise.
+    Intensity,
+    /// ASPRS class, with the usual class colours.
+    Class,
+    /// Single, first, intermediate or last return.
+    Return,
+    /// Flight line.
+    Strip,
+}
+
+impl ColorBy {
+    /// Parses `height`, `intensity`, `class`, `return` or `strip`.
+    pub fn from_name(s: &str) -> Option<Self> {
+        match s {
+            "height" | "z" => Some(ColorBy::Height),
+            "intensity" => Some(ColorBy::Intensity),
+            "class" | "classification" => Some(ColorBy::Class),
+            "return" | "returns" => Some(ColorBy::Return),
+            "strip" | "line" | "source" => Some(ColorBy::Strip),
+            _ => None,
+        }
+    }
+}
+
+/// An RGB raster.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Image {
+    /// Width, px.
+    pub width: usize,
+    /// Height, px.
+    pub height: usize,
+    /// Row-major RGB bytes, top row first.
+    pub rgb: Vec<u8>,
+}
+
+/// Colour of pixels without points.
+pub const EMPTY: [u8; 3] = [235, 235, 235];
+const BACKGROUND: [u8; 3] = [255, 255, 255];
+const INK: [u8; 3] = [20, 20, 20];
+const LEGEND_WIDTH: usize = 150;
+const FOOTER_HEIGHT: usize = 34;
+
+impl Image {
+    /// A `width × height` image filled with `color`.
+    pub fn new(width: usize, height: usize, color: [u8; 3]) -> Self {
+        Self {
+            width,
+            height,
+            rgb: color.repeat(width * height),
+        }
+    }
+
+    /// The colour at `(x, y)`.
+    pub fn get(&self, x: usize, y: usize) -> [u8; 3] {
+        let i = 3 * (y * self.width + x);
+        [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
+    }
+
+    /// Sets the colour at `(x, y)` (ignored outside).
+    pub fn set(&mut self, x: usize, y: usize, c: [u8; 3]) {
+        if x < self.width && y < self.height {
+            let i = 3 * (y * self.width + x);
+            self.rgb[i..i + 3].copy_from_slice(&c);
+        }
+    }
+
+    /// Fills a rectangle.
+    pub fn fill(&mut self, x0: usize, y0: usize, w: usize, h: usize, c: [u8; 3]) {
+        for y in y0..y0 + h {
+            for x in x0..x0 + w {
+                self.set(x, y, c);
+            }
+        }
+    }
+
+    /// Writes text in the built-in 5×7 font (upper case; 6 px per
+    /// character, scale 1).
+    pub fn text(&mut self, x: usize, y: usize, s: &str, c: [u8; 3]) {
+        for (k, ch) in s.chars().enumerate() {
+            let rows = glyph(ch.to_ascii_uppercase());
+            for (r, row) in rows.iter().enumerate() {
+                for (col, b) in row.bytes().enumerate() {
+                    if b == b'#' {
+                        self.set(x + 6 * k + col, y + r, c);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Saves as an 8-bit RGB PNG.
+    pub fn save_png(&self, path: &Path) -> io::Result<()> {
+        let file = std::fs::File::create(path)?;
+        let mut enc = png::Encoder::new(
+            io::BufWriter::new(file),
+            self.width as u32,
+            self.height as u32,
+        );
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut w = enc.write_header().map_err(io::Error::other)?;
+        w.write_image_data(&self.rgb).map_err(io::Error::other)?;
+        w.finish().map_err(io::Error::other)
+    }
+}
+
+/// A perceptually ordered colour ramp (anchors of matplotlib's viridis),
+/// `v` in 0–1.
+pub fn ramp(v: f64) -> [u8; 3] {
+    const A: [[f64; 3]; 5] = [
+        [68.0, 1.0, 84.0],
+        [59.0, 82.0, 139.0],
+        [33.0, 145.0, 140.0],
+        [94.0, 201.0, 98.0],
+        [253.0, 231.0, 37.0],
+    ];
+    let v = if v.is_finite() {
+        v.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let x = v * 4.0;
+    let i = (x.floor() as usize).min(3);
+    let f = x - i as f64;
+    std::array::from_fn(|k| (A[i][k] + f * (A[i + 1][k] - A[i][k])).round() as u8)
+}
+
+/// Colour and legend name of an ASPRS class.
+pub fn class_color(class: u8) -> ([u8; 3], &'static str) {
+    match class {
+        2 => ([166, 118, 29], "ground"),
+        3 => ([178, 223, 138], "low veg"),
+        4 => ([102, 189, 99], "medium veg"),
+        5 => ([26, 120, 50], "high veg"),
+        6 => ([215, 48, 39], "building"),
+        7 => ([255, 0, 255], "noise"),
+        9 => ([49, 130, 189], "water"),
+        11 => ([120, 120, 120], "road"),
+        17 => ([253, 174, 97], "bridge"),
+        _ => ([200, 200, 200], "other"),
+    }
+}
+
+fn return_color(p: &RenderPoint) -> ([u8; 3], &'static str) {
+    if p.number_of_returns <= 1 {
+        ([90, 90, 90], "single")
+    } else if p.return_number == 1 {
+        ([31, 120, 180], "first")
+    } else if p.return_number >= p.number_of_returns {
+        ([227, 26, 28], "last")
+    } else {
+        ([51, 160, 44], "intermediate")
+    }
+}
+
+fn strip_color(source: u16) -> [u8; 3] {
+    const P: [[u8; 3]; 8] = [
+        [31, 119, 180],
+        [255, 127, 14],
+        [44, 160, 44],
+        [214, 39, 40],
+        [148, 103, 189],
+        [140, 86, 75],
+        [227, 119, 194],
+        [23, 190, 207],
+    ];
+    P[usize::from(source) % P.len()]
+}
+
+/// A value range from the 2nd to the 98th percentile.
+fn robust_range(mut v: Vec<f64>) -> (f64, f64) {
+    if v.is_empty() {
+        return (0.0, 1.0);
+    }
+    v.sort_by(f64::total_cmp);
+    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+    let (lo, hi) = (at(0.02), at(0.98));
+    if hi > lo {
+        (lo, hi)
+    } else {
+        (lo - 0.5, lo + 0.5)
+    }
+}
+
+/// How each point is coloured, and the legend that explains it.
+struct Palette {
+    by: ColorBy,
+    range: (f64, f64),
+    entries: Vec<([u8; 3], String)>,
+}
+
+impl Palette {
+    fn new(points: &[RenderPoint], by: ColorBy) -> Self {
+        let mut entries = Vec::new();
+        let range = match by {
+            ColorBy::Height => robust_range(points.iter().map(|p| p.z).collect()),
+            ColorBy::Intensity => {
+                robust_range(points.iter().map(|p| f64::from(p.intensity)).collect())
+            }
+            ColorBy::Class => {
+                let mut classes: Vec<u8> = points.iter().map(|p| p.classification).collect();
+                classes.sort_unstable();
+                classes.dedup();
+                entries = classes
+                    .iter()
+                    .map(|c| {
+                        let (col, name) = class_color(*c);
+                        (col, format!("{c} {name}"))
+                    })
+                    .collect();
+                (0.0, 1.0)
+            }
+            ColorBy::Return => {
+                for p in points {
+                    let (c, n) = return_color(p);
+                    if !entries.iter().any(|(_, e)| e == n) {
+                        entries.push((c, n.to_string()));
+                    }
+                }
+                (0.0, 1.0)
+            }
+            ColorBy::Strip => {
+                let mut s: Vec<u16> = points.iter().map(|p| p.source).collect();
+                s.sort_unstable();
+                s.dedup();
+                entries = s
+                    .iter()
+                    .map(|id| (strip_color(*id), format!("line {id}")))
+                    .collect();
+                (0.0, 1.0)
+            }
+        };
+        Self { by, range, entries }
+    }
+
+    fn color(&self, p: &RenderPoint) -> [u8; 3] {
+        let scale = |v: f64| (v - self.range.0) / (self.range.1 - self.range.0);
+        match self.by {
+            ColorBy::Height => ramp(scale(p.z)),
+            ColorBy::Intensity => ramp(scale(f64::from(p.intensity))),
+            ColorBy::Class => class_color(p.classification).0,
+            ColorBy::Return => return_color(p).0,
+            ColorBy::Strip => strip_color(p.source),
+        }
+    }
+
+    /// Draws the legend or colour bar in the panel starting at `x0`.
+    fn draw(&self, img: &mut Image, x0: usize, top: usize, bottom: usize) {
+        match self.by {
+            ColorBy::Height | ColorBy::Intensity => {
+                let unit = if self.by == ColorBy::Height { " M" } else { "" };
+                let (y0, y1) = (top + 20, bottom.saturating_sub(20).max(top + 40));
+                img.text(
+                    x0,
+                    top + 4,
+                    if self.by == ColorBy::Height {
+                        "HEIGHT"
+                    } else {
+                        "INTENSITY"
+                    },
+                    INK,
+                );
+                for y in y0..y1 {
+                    let v = 1.0 - (y - y0) as f64 / (y1 - y0 - 1).max(1) as f64;
+                    img.fill(x0, y, 24, 1, ramp(v));
+                }
+                img.text(
+                    x0 + 30,
+                    y0,
+                    &format!("{:.1}{unit}", self.range.1 + 0.0),
+                    INK,
+                );
+                img.text(
+                    x0 + 30,
+                    y1 - 7,
+                    &format!("{:.1}{unit}", self.range.0 + 0.0),
+                    INK,
+                );
+            }
+            _ => {
+                for (k, (c, name)) in self.entries.iter().enumerate() {
+                    let y = top + 6 + 16 * k;
+                    img.fill(x0, y, 12, 10, *c);
+                    img.text(x0 + 18, y + 2, name, INK);
+                }
+            }
+        }
+    }
+}
+
+/// Pixel size for a picture of `extent` metres on its longer side, at
+/// most 1600 px, and no finer than `min_m`.
+fn auto_resolution(w: f64, h: f64, n: usize, requested: Option<f64>) -> f64 {
+    if let Some(r) = requested {
+        return r;
+    }
+    // About four points per pixel on average (scan lines leave gaps
+    // finer than the mean spacing), at most 1600 px.
+    let by_density = (w * h / (n.max(1) as f64) * 4.0).sqrt();
+    by_density.max(w.max(h) / 1600.0).max(1e-3)
+}
+
+/// Draws a scale bar of a round length under the map.
+fn scale_bar(img: &mut Image, x0: usize, y: usize, map_width_px: usize, resolution_m: f64) {
+    let target = map_width_px as f64 * resolution_m / 4.0;
+    let mag = 10f64.powf(target.log10().floor());
+    let len = [1.0, 2.0, 5.0, 10.0]
+        .iter()
+        .map(|f| f * mag)
+        .filter(|l| *l <= target)
+        .fold(mag, f64::max);
+    let px = (len / resolution_m).round() as usize;
+    img.fill(x0, y, px, 4, INK);
+    img.fill(x0, y - 4, 2, 8, INK);
+    img.fill(x0 + px.saturating_sub(2), y - 4, 2, 8, INK);
+    img.text(x0 + px + 8, y - 2, &format!("{len} M"), INK);
+}
+
+/// A top view: for every pixel the highest point's colour.
+pub fn top_view(points: &[RenderPoint], by: ColorBy, resolution_m: Option<f64>) -> Image {
+    let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
+    for p in points {
+        x0 = x0.min(p.x);
+        y0 = y0.min(p.y);
+        x1 = x1.max(p.x);
+        y1 = y1.max(p.y);
+    }
+    if points.is_empty() {
+        (x0, y0, x1, y1) = (0.0, 0.0, 1.0, 1.0);
+    }
+    let res = auto_resolution(x1 - x0, y1 - y0, points.len(), resolution_m);
+    let w = (((x1 - x0) / res).floor() as usize + 1).max(1);
+    let h = (((y1 - y0) / res).floor() as usize + 1).max(1);
+    let palette = Palette::new(points, by);
+    let mut top = vec![f64::NEG_INFINITY; w * h];
+    let mut img = Image::new(w + LEGEND_WIDTH, (h + FOOTER_HEIGHT).max(200), BACKGROUND);
+    img.fill(0, 0, w, h, EMPTY);
+    for p in points {
+        let i = (((p.x - x0) / res) as usize).min(w - 1);
+        // North up: row 0 is the largest y.
+        let j = h - 1 - (((p.y - y0) / res) as usize).min(h - 1);
+        if p.z > top[j * w + i] {
+            top[j * w + i] = p.z;
+            img.set(i, j, palette.color(p));
+        }
+    }
+    // Close single-pixel gaps between scan lines: an empty pixel takes the
+    // colour of its highest filled neighbour, if at least half of its eight
+    // neighbours are filled (so real gaps, e.g. under nothing, stay empty).
+    let filled = top.clone();
+    for j in 0..h {
+        for i in 0..w {
+            if filled[j * w + i] > f64::NEG_INFINITY {
+                continue;
+            }
+            let mut best: Option<(f64, usize, usize)> = None;
+            let mut count = 0;
+            for (di, dj) in [
+                (-1i64, -1i64),
+                (0, -1),
+                (1, -1),
+                (-1, 0),
+                (1, 0),
+                (-1, 1),
+                (0, 1),
+                (1, 1),
+            ] {
+                let (ni, nj) = (i as i64 + di, j as i64 + dj);
+                if ni < 0 || nj < 0 || ni >= w as i64 || nj >= h as i64 {
+                    continue;
+                }
+                let z = filled[nj as usize * w + ni as usize];
+                if z > f64::NEG_INFINITY {
+                    count += 1;
+                    if best.is_none_or(|b| z > b.0) {
+                        best = Some((z, ni as usize, nj as usize));
+                    }
+                }
+            }
+            if count >= 4
+                && let Some((_, ni, nj)) = best
+            {
+                let c = img.get(ni, nj);
+                img.set(i, j, c);
+            }
+        }
+    }
+    palette.draw(&mut img, w + 10, 0, h.max(200 - FOOTER_HEIGHT));
+    scale_bar(&mut img, 10, h + 18, w, res);
+    img
+}
+
+/// A cross-section: the points within `width_m / 2` of the segment from
+/// `a` to `b` (x, y), drawn by distance along it (horizontal) and height
+/// (vertical), at `resolution_m` per pixel in both directions.
+pub fn profile(
+    points: &[RenderPoint],
+    a: (f64, f64),
+    b: (f64, f64),
+    width_m: f64,
+    by: ColorBy,
+    resolution_m: Option<f64>,
+) -> Image {
+    let (dx, dy) = (b.0 - a.0, b.1 - a.1);
+    let len = dx.hypot(dy).max(1e-9);
+    let (ux, uy) = (dx / len, dy / len);
+    let sel: Vec<(f64, &RenderPoint)> = points
+        .iter()
+        .filter_map(|p| {
+            let (rx, ry) = (p.x - a.0, p.y - a.1);
+            let along = rx * ux + ry * uy;
+            let across = -rx * uy + ry * ux;
+            ((0.0..=len).contains(&along) && across.abs() <= 0.5 * width_m).then_some((along, p))
+        })
+        .collect();
+    let (z0, z1) = sel.iter().fold((f64::MAX, f64::MIN), |(lo, hi), (_, p)| {
+        (lo.min(p.z), hi.max(p.z))
+    });
+    let (z0, z1) = if sel.is_empty() {
+        (0.0, 1.0)
+    } else {
+        (z0 - 1.0, z1 + 1.0)
+    };
+    let res = resolution_m.unwrap_or((len / 1200.0).max(0.05));
+    let w = (len / res).ceil() as usize + 1;
+    let h = ((z1 - z0) / res).ceil() as usize + 1;
+    let selected: Vec<RenderPoint> = sel.iter().map(|(_, p)| **p).collect();
+    let palette = Palette::new(&selected, by);
+    let mut img = Image::new(w + LEGEND_WIDTH, (h + FOOTER_HEIGHT).max(200), BACKGROUND);
+    img.fill(0, 0, w, h, EMPTY);
+    for (along, p) in &sel {
+        let i = ((along / res) as usize).min(w - 1);
+        let j = h - 1 - (((p.z - z0) / res) as usize).min(h - 1);
+        img.set(i, j, palette.color(p));
+    }
+    palette.draw(&mut img, w + 10, 0, h.max(200 - FOOTER_HEIGHT));
+    scale_bar(&mut img, 10, h + 18, w, res);
+    img
+}
+
+/// The row of a profile image at height `z` for a profile whose points span
+/// `[z_min, z_max]` at `resolution_m` (the inverse of the mapping above).
+pub fn profile_row(z: f64, z_min: f64, z_max: f64, resolution_m: f64) -> usize {
+    let (z0, z1) = (z_min - 1.0, z_max + 1.0);
+    let h = ((z1 - z0) / resolution_m).ceil() as usize + 1;
+    h - 1 - (((z - z0) / resolution_m) as usize).min(h - 1)
+}
+
+/// 5×7 glyphs of the built-in font.
+fn glyph(c: char) -> [&'static str; 7] {
+    match c {
+        '0' => [
+            ".###.", "#...#", "#..##", "#.#.#", "##..#", "#...#", ".###.",
+        ],
+        '1' => [
+            "..#..", ".##..", "..#..", "..#..", "..#..", "..#..", ".###.",
+        ],
+        '2' => [
+            ".###.", "#...#", "....#", "...#.", "..#..", ".#...", "#####",
+        ],
+        '3' => [
+            "####.", "....#", "....#", ".###.", "....#", "....#", "####.",
+        ],
+        '4' => [
+            "...#.", "..##.", ".#.#.", "#..#.", "#####", "...#.", "...#.",
+        ],
+        '5' => [
+            "#####", "#....", "####.", "....#", "....#", "#...#", ".###.",
+        ],
+        '6' => [
+            ".###.", "#....", "#....", "####.", "#...#", "#...#", ".###.",
+        ],
+        '7' => [
+            "#####", "....#", "...#.", "..#..", ".#...", ".#...", ".#...",
+        ],
+        '8' => [
+            ".###.", "#...#", "#...#", ".###.", "#...#", "#...#", ".###.",
+        ],
+        '9' => [
+            ".###.", "#...#", "#...#", ".####", "....#", "....#", ".###.",
+        ],
+        'A' => [
+            ".###.", "#...#", "#...#", "#####", "#...#", "#...#", "#...#",
+        ],
+        'B' => [
+            "####.", "#...#", "#...#", "####.", "#...#", "#...#", "####.",
+        ],
+        'C' => [
+            ".###.", "#...#", "#....", "#....", "#....", "#...#", ".###.",
+        ],
+        'D' => [
+            "####.", "#...#", "#...#", "#...#", "#...#", "#...#", "####.",
+        ],
+        'E' => [
+            "#####", "#....", "#....", "####.", "#....", "#....", "#####",
+        ],
+        'F' => [
+            "#####", "#....", "#....", "####.", "#....", "#....", "#....",
+        ],
+        'G' => [
+            ".###.", "#...#", "#....", "#.###", "#...#", "#...#", ".###.",
+        ],
+        'H' => [
+            "#...#", "#...#", "#...#", "#####", "#...#", "#...#", "#...#",
+        ],
+        'I' => [
+            ".###.", "..#..", "..#..", "..#..", "..#..", "..#..", ".###.",
+        ],
+        'J' => [
+            "..###", "...#.", "...#.", "...#.", "...#.", "#..#.", ".##..",
+        ],
+        'K' => [
+            "#...#", "#..#.", "#.#..", "##...", "#.#..", "#..#.", "#...#",
+        ],
+        'L' => [
+            "#....", "#....", "#....", "#....", "#....", "#....", "#####",
+        ],
+        'M' => [
+            "#...#", "##.##", "#.#.#", "#.#.#", "#...#", "#...#", "#...#",
+        ],
+        'N' => [
+            "#...#", "#...#", "##..#", "#.#.#", "#..##", "#...#", "#...#",
+        ],
+        'O' => [
+            ".###.", "#...#", "#...#", "#...#", "#...#", "#...#", ".###.",
+        ],
+        'P' => [
+            "####.", "#...#", "#...#", "####.", "#....", "#....", "#....",
+        ],
+        'Q' => [
+            ".###.", "#...#", "#...#", "#...#", "#.#.#", "#..#.", ".##.#",
+        ],
+        'R' => [
+            "####.", "#...#", "#...#", "####.", "#.#..", "#..#.", "#...#",
+        ],
+        'S' => [
+            ".####", "#....", "#....", ".###.", "....#", "....#", "####.",
+        ],
+        'T' => [
+            "#####", "..#..", "..#..", "..#..", "..#..", "..#..", "..#..",
+        ],
+        'U' => [
+            "#...#", "#...#", "#...#", "#...#", "#...#", "#...#", ".###.",
+        ],
+        'V' => [
+            "#...#", "#...#", "#...#", "#...#", "#...#", ".#.#.", "..#..",
+        ],
+        'W' => [
+            "#...#", "#...#", "#...#", "#.#.#", "#.#.#", "#.#.#", ".#.#.",
+        ],
+        'X' => [
+            "#...#", "#...#", ".#.#.", "..#..", ".#.#.", "#...#", "#...#",
+        ],
+        'Y' => [
+            "#...#", "#...#", ".#.#.", "..#..", "..#..", "..#..", "..#..",
+        ],
+        'Z' => [
+            "#####", "....#", "...#.", "..#..", ".#...", "#....", "#####",
+        ],
+        '.' => [
+            ".....", ".....", ".....", ".....", ".....", ".##..", ".##..",
+        ],
+        '-' => [
+            ".....", ".....", ".....", "#####", ".....", ".....", ".....",
+        ],
+        '/' => [
+            "....#", "....#", "...#.", "..#..", ".#...", "#....", "#....",
+        ],
+        '²' => [
+            ".##..", "...#.", "..#..", ".###.", ".....", ".....", ".....",
+        ],
+        _ => [
+            ".....", ".....", ".....", ".....", ".....", ".....", ".....",
+        ],
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pt(x: f64, y: f64, z: f64, class: u8) -> RenderPoint {
+        RenderPoint {
+            x,
+            y,
+            z,
+            intensity: 100,
+            classification: class,
+            return_number: 1,
+            number_of_returns: 1,
+            source: 1,
+        }
+    }
+
+    /// Position of a colour on the ramp (nearest of 1001 samples).
+    fn ramp_position(c: [u8; 3]) -> f64 {
+        (0..=1000)
+            .map(|i| i as f64 / 1000.0)
+            .min_by_key(|v| {
+                let r = ramp(*v);
+                (0..3)
+                    .map(|k| (i32::from(r[k]) - i32::from(c[k])).pow(2))
+                    .sum::<i32>()
+            })
+            .unwrap()
+    }
+
+    #[test]
+    fn a_height_ramp_gives_a_monotonic_colour_ramp() {
+        // A plane rising eastwards, 1 point per 0.5 m.
+        let pts: Vec<RenderPoint> = (0..200)
+            .flat_map(|i| {
+                (0..40).map(move |j| pt(i as f64 * 0.5, j as f64 * 0.5, i as f64 * 0.1, 2))
+            })
+            .collect();
+        let img = top_view(&pts, ColorBy::Height, Some(0.5));
+        let row = 10;
+        let pos: Vec<f64> = (0..200).map(|x| ramp_position(img.get(x, row))).collect();
+        assert!(pos.windows(2).all(|w| w[1] >= w[0]), "not monotonic");
+        assert!(pos[0] < 0.05 && pos[199] > 0.95);
+    }
+
+    #[test]
+    fn two_classes_give_two_legend_colours_in_place() {
+        // West half ground, east half building.
+        let pts: Vec<RenderPoint> = (0..100)
+            .flat_map(|i| {
+                (0..50).map(move |j| {
+                    let x = i as f64;
+                    pt(x, j as f64, 0.0, if x < 50.0 { 2 } else { 6 })
+                })
+            })
+            .collect();
+        let img = top_view(&pts, ColorBy::Class, Some(1.0));
+        let (ground, building) = (class_color(2).0, class_color(6).0);
+        let mut seen = std::collections::BTreeSet::new();
+        for y in 0..50 {
+            for x in 0..100 {
+                let c = img.get(x, y);
+                seen.insert(c);
+                assert_eq!(c, if x < 50 { ground } else { building }, "({x}, {y})");
+            }
+        }
+        assert_eq!(seen.len(), 2);
+        // The legend shows exactly those two swatches, in class order.
+        assert_eq!(img.get(100 + 10 + 5, 6 + 5), ground);
+        assert_eq!(img.get(100 + 10 + 5, 22 + 5), building);
+    }
+
+    #[test]
+    fn a_gabled_roof_profile_puts_the_roof_line_at_its_rows() {
+        // Roof across x: eaves at x = ±10 (z = 6), ridge at x = 0 (z = 12).
+        let pts: Vec<RenderPoint> = (-100..=100)
+            .flat_map(|i| {
+                let x = i as f64 * 0.1;
+                (0..5).map(move |j| pt(x, j as f64 * 0.2, 12.0 - 0.6 * x.abs(), 6))
+            })
+            .collect();
+        let res = 0.1;
+        let img = profile(
+            &pts,
+            (-10.0, 0.4),
+            (10.0, 0.4),
+            2.0,
+            ColorBy::Class,
+            Some(res),
+        );
+        let ink = |x: usize| (0..img.height - FOOTER_HEIGHT).find(|&y| img.get(x, y) != EMPTY);
+        for (x_m, z) in [(0.0, 12.0), (-5.0, 9.0), (5.0, 9.0), (-9.9, 6.06)] {
+            let col = ((x_m + 10.0) / res) as usize;
+            let want = profile_row(z, 6.0, 12.0, res);
+            let got = ink(col).unwrap();
+            assert!(got.abs_diff(want) <= 1, "x {x_m}: row {got} vs {want}");
+        }
+    }
+}
