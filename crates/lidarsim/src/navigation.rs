@@ -210,7 +210,7 @@ pub fn preset(name: &str) -> Option<(ErrorModel, ErrorModel)> {
         )),
         // A consumer-grade UAV without RTK: single-frequency GNSS (metre
         // level, slowly wandering) and a MEMS IMU (tenths of a degree).
-        "uav" | "consumer-uav" => Some((
+        "uav" => Some((
             ErrorModel {
                 bias: [0.0; 3],
                 sigma: [0.05, 0.05, 0.1],

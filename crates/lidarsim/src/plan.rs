@@ -124,7 +124,13 @@ pub fn plan(survey: &Survey, caster: &dyn RayCaster) -> Plan {
         swath_width_m: weighted(|l| l.swath_width_m),
         point_density_per_m2: weighted(|l| l.point_density_per_m2),
         footprint_diameter_m: weighted(|l| l.footprint_diameter_m),
-        expected_las_bytes: 375 + 30 * pulses,
+        // Header, plus the Extra Bytes VLR (54 + 3 × 192 bytes) and 12 bytes
+        // per point when error vectors are written.
+        expected_las_bytes: if survey.navigation.is_zero() {
+            375 + 30 * pulses
+        } else {
+            375 + 630 + 42 * pulses
+        },
         flight_time_s,
         pulses,
         lines,

@@ -123,6 +123,15 @@ pub fn run_to_dir(
         files.push("points.xyz".to_string());
     }
 
+    // The survey as run, with the seed fixed and file paths made absolute,
+    // so `lidarsim run DIR/survey.toml` repeats it and `lidarsim waveform`
+    // can simulate any pulse again.
+    let survey_path = out_dir.join("survey.toml");
+    let text = toml::to_string(&replayable(survey))
+        .map_err(|e| io_err(&survey_path)(io::Error::other(e)))?;
+    write_atomic(&survey_path, text.as_bytes()).map_err(io_err(&survey_path))?;
+    files.push("survey.toml".to_string());
+
     // The trajectory flown (trajectory.csv, kept under its first name, and
     // trajectory_true.csv) and the one the GNSS/IMU measured.
     for (name, observed) in [
@@ -220,6 +229,34 @@ fn summarize(
         forest_trees: survey.forest_trees.clone(),
         plan,
     }
+}
+
+/// The raw survey with its seed fixed and relative file paths (meshes,
+/// trajectory file) resolved against the survey's directory.
+pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
+    let mut raw = survey.raw.clone();
+    raw.seed = Some(survey.seed);
+    let base = survey
+        .source
+        .as_ref()
+        .and_then(|p| p.parent())
+        .map(Path::to_path_buf)
+        .unwrap_or_default();
+    let resolve = |f: &mut String| {
+        let p = base.join(&*f);
+        if let Ok(abs) = std::path::absolute(&p) {
+            *f = abs.display().to_string();
+        }
+    };
+    for m in &mut raw.meshes {
+        if let Some(f) = m.file.as_mut() {
+            resolve(f);
+        }
+    }
+    if let Some(f) = raw.platform.trajectory_file.as_mut() {
+        resolve(f);
+    }
+    raw
 }
 
 /// LAS header settings: offset at the scene centre rounded to 100 m (so

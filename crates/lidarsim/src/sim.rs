@@ -147,6 +147,11 @@ impl<'a> Simulator<'a> {
         &self.receiver
     }
 
+    /// The echo detector.
+    pub fn detector(&self) -> &Detector {
+        &self.detector
+    }
+
     /// Time of emission of pulse `k` of `line` since the flight start, s
     /// (`t_k = t_0 + k / PRF`, computed from the integer tick).
     #[inline]

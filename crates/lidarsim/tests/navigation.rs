@@ -407,3 +407,47 @@ fn drift_moves_the_flown_path_but_not_the_georeferencing() {
         .count();
     assert!(moved > pts.len() / 2);
 }
+
+#[test]
+fn trajectory_files_are_checked() {
+    let dir = std::env::temp_dir().join(format!("lidarsim-trajbad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let header = "time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line\n";
+    let cases = [
+        (
+            "0,0,0,100,0,0,0,0\n1,0,10,100,0,0,0,0.0\n2,0,20,100,0,0,0,1\n3,0,30,100,0,0,0,1\n",
+            None,
+        ),
+        (
+            "0,0,0,100,0,0,0,0\n1,0,10,100,0,0,0,1\n2,0,20,100,0,0,0,0\n",
+            Some("appears again"),
+        ),
+        (
+            "5,0,0,100,0,0,0,0\n6,0,10,100,0,0,0,0\n4,0,20,100,0,0,0,1\n",
+            Some("starts before"),
+        ),
+        (
+            "0,0,0,100,0,0,0,0\n1,0,x,100,0,0,0,0\n",
+            Some("line 3: `y_m` is 'x'"),
+        ),
+    ];
+    for (k, (rows, want)) in cases.iter().enumerate() {
+        let f = dir.join(format!("t{k}.csv"));
+        std::fs::write(&f, format!("{header}{rows}")).unwrap();
+        let text = format!(
+            "[platform]\ntrajectory_file = \"{}\"\n[materials.a]\nreflectance = 0.3\n[[polygon]]\n\
+             material = \"a\"\nvertices_m = [[-99, -99, 0], [99, -99, 0], [99, 99, 0]]\n",
+            f.display()
+        );
+        match (Survey::from_toml(&text, None), want) {
+            (Ok(s), None) => assert_eq!(s.lines.len(), 2, "0 and 0.0 are one line"),
+            (Err(e), Some(w)) => {
+                let d = &e.diagnostics[0];
+                assert_eq!(d.key, "platform.trajectory_file");
+                assert!(d.message.contains(w), "{}", d.message);
+            }
+            (r, w) => panic!("case {k}: {:?} / {w:?}", r.map(|s| s.lines.len())),
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -634,9 +634,13 @@ pub fn read_trajectory(
                 })
         };
         let v: Vec<f64> = (0..7).map(value).collect::<Result<_, _>>()?;
+        // Line values compare as numbers when they are numbers ("0" = "0.0").
         let key = line_col
             .and_then(|i| cells.get(i))
-            .map_or_else(String::new, |s| s.to_string());
+            .map_or_else(String::new, |s| match s.parse::<f64>() {
+                Ok(v) => v.to_string(),
+                Err(_) => s.to_string(),
+            });
         let sample = (
             v[0],
             DVec3::new(v[1], v[2], v[3]),
@@ -657,7 +661,24 @@ pub fn read_trajectory(
                 }
                 samples.push(sample);
             }
-            _ => segments.push((key, vec![sample])),
+            Some((_, samples)) if sample.0 <= samples[samples.len() - 1].0 => {
+                return Err(format!(
+                    "'{}' line {}: line '{key}' starts before the previous line ends; \
+                     lines must follow each other in time",
+                    path.display(),
+                    n + 1
+                ));
+            }
+            _ => {
+                if segments.iter().any(|(k, _)| *k == key) {
+                    return Err(format!(
+                        "'{}' line {}: line '{key}' appears again after other lines",
+                        path.display(),
+                        n + 1
+                    ));
+                }
+                segments.push((key, vec![sample]));
+            }
         }
     }
     let t0 = segments
@@ -1561,11 +1582,42 @@ impl Survey {
                  platform.trajectory_file",
             );
         } else if sources > 1 {
+            // Point at the second way given.
+            let key = if raw.plan.is_some() && !raw.flight_lines.is_empty() {
+                root.key("plan")
+            } else {
+                pp.key("trajectory_file")
+            };
             c.err(
-                root.key("plan"),
+                key,
                 "give flight lines one way only: [[flight_line]], [plan] or \
                  platform.trajectory_file",
             );
+        }
+        let interpolation = match p.interpolation.as_deref() {
+            None | Some("linear") => Interpolation::Linear,
+            Some("spline") => Interpolation::Spline,
+            Some(other) => {
+                c.err(
+                    pp.key("interpolation"),
+                    format!("unknown interpolation '{other}'; expected \"linear\" or \"spline\""),
+                );
+                Interpolation::Linear
+            }
+        };
+        if p.trajectory_file.is_some() {
+            for (set, key) in [
+                (p.sway.is_some(), "sway"),
+                (p.drift_m.is_some(), "drift_m"),
+                (p.turn_time_s.is_some(), "turn_time_s"),
+            ] {
+                if set {
+                    warnings.push(format!(
+                        "key `platform.{key}`: ignored with a trajectory file, which gives the \
+                         attitude, the path and the times itself"
+                    ));
+                }
+            }
         }
         if let Some(plan) = &raw.plan {
             straight.extend(check_plan(
@@ -1578,19 +1630,6 @@ impl Survey {
         let tracks = match &p.trajectory_file {
             None => Vec::new(),
             Some(file) => {
-                let interpolation = match p.interpolation.as_deref() {
-                    None | Some("linear") => Interpolation::Linear,
-                    Some("spline") => Interpolation::Spline,
-                    Some(other) => {
-                        c.err(
-                            pp.key("interpolation"),
-                            format!(
-                                "unknown interpolation '{other}'; expected \"linear\" or \"spline\""
-                            ),
-                        );
-                        Interpolation::Linear
-                    }
-                };
                 let full = base.join(file);
                 match read_trajectory(&full, interpolation) {
                     Ok(t) => t,
