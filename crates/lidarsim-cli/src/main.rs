@@ -69,6 +69,23 @@ enum Command {
         /// The survey (TOML).
         survey: PathBuf,
     },
+    /// Plot the full waveform of one pulse of a run (simulated again from its survey.toml).
+    Waveform {
+        /// Output directory of a run (it holds survey.toml).
+        dir: PathBuf,
+        /// Pulse index within its flight line (see pulse numbers in points.xyz order).
+        #[arg(long, conflicts_with = "gps_time")]
+        pulse: Option<u64>,
+        /// Flight line (the point source ID: 1 for the first line).
+        #[arg(long, default_value_t = 1)]
+        line: u32,
+        /// Find the pulse by its GPS time instead (a point's gps_time).
+        #[arg(long)]
+        gps_time: Option<f64>,
+        /// Output PNG.
+        #[arg(short, long, default_value = "waveform.png")]
+        output: PathBuf,
+    },
     /// Render a LAS file (ours or anyone's) as a top view or a cross-section PNG.
     Render {
         /// The point cloud (LAS).
@@ -145,6 +162,16 @@ fn main() -> ExitCode {
             }
             Err((code, msg)) => fail(code, &msg),
         },
+        Command::Waveform {
+            dir,
+            pulse,
+            line,
+            gps_time,
+            output,
+        } => match waveform(&dir, pulse, line, gps_time, &output) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err((code, msg)) => fail(code, &msg),
+        },
         Command::Check { survey } => match Survey::load(&survey) {
             Ok(s) => {
                 warn(&s);
@@ -216,6 +243,113 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>) -> ExitCode {
         }
         Err(e) => fail(1, &e.to_string()),
     }
+}
+
+/// Simulates one pulse of a run again and plots its waveform.
+fn waveform(
+    dir: &Path,
+    pulse: Option<u64>,
+    line: u32,
+    gps_time: Option<f64>,
+    output: &Path,
+) -> Result<(), (u8, String)> {
+    use lidarsim::waveform::bin_to_range;
+    let survey_path = dir.join("survey.toml");
+    let survey = Survey::load(&survey_path).map_err(|e| (2, e.to_string()))?;
+    let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
+    let prf = survey.scanner.prf_hz;
+    // The line and pulse: given, or found from a GPS time.
+    let (line_ref, k) = match gps_time {
+        Some(t) => {
+            let t = t - offset;
+            let l = survey
+                .lines
+                .iter()
+                .find(|l| t >= l.start_time_s - 0.5 / prf && t < l.start_time_s + l.duration_s())
+                .ok_or_else(|| {
+                    (
+                        2,
+                        format!("--gps-time {}: no flight line was flying then", t + offset),
+                    )
+                })?;
+            (l, ((t - l.start_time_s) * prf).round().max(0.0) as u64)
+        }
+        None => {
+            let l = survey
+                .lines
+                .get((line as usize).wrapping_sub(1))
+                .ok_or_else(|| {
+                    (
+                        2,
+                        format!(
+                            "--line {line}: the survey has {} line(s)",
+                            survey.lines.len()
+                        ),
+                    )
+                })?;
+            let k = pulse.ok_or_else(|| (2, "give --pulse N or --gps-time T".to_string()))?;
+            (l, k)
+        }
+    };
+    let n = survey.pulses_of(line_ref);
+    if k >= n {
+        return Err((
+            2,
+            format!(
+                "pulse {k}: line {} has pulses 0 to {}",
+                line_ref.index + 1,
+                n - 1
+            ),
+        ));
+    }
+    let bvh = Bvh::build(survey.scene.clone());
+    let sim = lidarsim::sim::Simulator::new(&survey, &bvh);
+    let mut scratch = lidarsim::sim::Scratch::default();
+    let mut points = Vec::new();
+    sim.simulate_pulse(line_ref, k, &mut scratch, &mut points);
+    let wf = scratch.waveform();
+    let bin_s = survey.receiver.bin_s;
+    let threshold = sim.detector().threshold();
+    let ranges: Vec<f64> = (0..wf.samples.len())
+        .map(|i| bin_to_range((wf.first_bin + i as i64) as f64, bin_s))
+        .collect();
+    let background_at = |bin: f64| {
+        let i = (bin.round() as i64 - wf.first_bin).clamp(0, wf.background.len().max(1) as i64 - 1);
+        wf.background.get(i as usize).copied().unwrap_or(0.0)
+    };
+    let plot = lidarsim::render::WaveformPlot {
+        signal: wf.samples.clone(),
+        returns: wf.impulses.clone(),
+        threshold: wf.background.iter().map(|b| b + threshold).collect(),
+        echoes: scratch
+            .echoes()
+            .iter()
+            .map(|e| (e.range_m, e.peak_amplitude + background_at(e.bin)))
+            .collect(),
+        ranges_m: ranges,
+    };
+    plot.render()
+        .save_png(output)
+        .map_err(|e| (1, format!("{}: {e}", output.display())))?;
+    say!(
+        "line {} pulse {k} (GPS time {:.6} s): {} sub-ray returns, {} echo(es)",
+        line_ref.index + 1,
+        offset + sim.pulse_time(line_ref, k),
+        scratch.returns().len(),
+        scratch.echoes().len()
+    );
+    for (i, e) in scratch.echoes().iter().enumerate() {
+        say!(
+            "  echo {}: range {:.3} m, peak {:.4}, energy amplitude {:.4}, width {:.2} ns",
+            i + 1,
+            e.range_m,
+            e.peak_amplitude,
+            e.amplitude,
+            e.width_ns
+        );
+    }
+    say!("wrote {}", output.display());
+    Ok(())
 }
 
 /// Reads a LAS file and writes a top view or profile PNG. Errors carry the

@@ -364,3 +364,49 @@ fn render_writes_top_views_and_profiles_and_rejects_bad_options() {
     assert_eq!(o.status.code(), Some(1));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn waveform_plots_a_pulse_of_a_run() {
+    let dir = temp("waveform");
+    let (o, out) = run_survey(&dir, GOOD);
+    assert!(o.status.success());
+    assert!(out.join("survey.toml").exists());
+    let png = dir.join("w.png");
+    let o = bin()
+        .arg("waveform")
+        .arg(&out)
+        .args(["--pulse", "100", "-o"])
+        .arg(&png)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // One echo from the plane 300 m below at the pulse's scan angle.
+    assert!(text.contains("1 echo(es)"), "{text}");
+    assert!(text.contains("range 30"), "{text}");
+    assert_eq!(&std::fs::read(&png).unwrap()[..4], b"\x89PNG");
+    // The run's survey.toml repeats the run exactly.
+    let again = dir.join("again");
+    let o = bin()
+        .arg("run")
+        .arg(out.join("survey.toml"))
+        .arg("-o")
+        .arg(&again)
+        .env("SOURCE_DATE_EPOCH", "1790000000")
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+    assert_eq!(
+        std::fs::read(out.join("points.xyz")).unwrap(),
+        std::fs::read(again.join("points.xyz")).unwrap()
+    );
+    for bad in [
+        vec!["--pulse", "99999999"],
+        vec!["--line", "5", "--pulse", "1"],
+        vec![],
+    ] {
+        let o = bin().arg("waveform").arg(&out).args(&bad).output().unwrap();
+        assert_eq!(o.status.code(), Some(2), "{bad:?}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
