@@ -253,7 +253,6 @@ fn waveform(
     gps_time: Option<f64>,
     output: &Path,
 ) -> Result<(), (u8, String)> {
-    use lidarsim::waveform::bin_to_range;
     let survey_path = dir.join("survey.toml");
     let survey = Survey::load(&survey_path).map_err(|e| (2, e.to_string()))?;
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
@@ -304,30 +303,7 @@ fn waveform(
     }
     let bvh = Bvh::build(survey.scene.clone());
     let sim = lidarsim::sim::Simulator::new(&survey, &bvh);
-    let mut scratch = lidarsim::sim::Scratch::default();
-    let mut points = Vec::new();
-    sim.simulate_pulse(line_ref, k, &mut scratch, &mut points);
-    let wf = scratch.waveform();
-    let bin_s = survey.receiver.bin_s;
-    let threshold = sim.detector().threshold();
-    let ranges: Vec<f64> = (0..wf.samples.len())
-        .map(|i| bin_to_range((wf.first_bin + i as i64) as f64, bin_s))
-        .collect();
-    let background_at = |bin: f64| {
-        let i = (bin.round() as i64 - wf.first_bin).clamp(0, wf.background.len().max(1) as i64 - 1);
-        wf.background.get(i as usize).copied().unwrap_or(0.0)
-    };
-    let plot = lidarsim::render::WaveformPlot {
-        signal: wf.samples.clone(),
-        returns: wf.impulses.clone(),
-        threshold: wf.background.iter().map(|b| b + threshold).collect(),
-        echoes: scratch
-            .echoes()
-            .iter()
-            .map(|e| (e.range_m, e.peak_amplitude + background_at(e.bin)))
-            .collect(),
-        ranges_m: ranges,
-    };
+    let (plot, scratch) = lidarsim::render::WaveformPlot::of_pulse(&sim, line_ref, k);
     plot.render()
         .save_png(output)
         .map_err(|e| (1, format!("{}: {e}", output.display())))?;

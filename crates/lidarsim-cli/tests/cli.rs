@@ -213,7 +213,14 @@ fn good_survey_runs_and_check_predicts_it() {
     let dir = temp("good");
     let (o, out) = run_survey(&dir, GOOD);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for f in ["points.las", "points.xyz", "summary.json", "trajectory.csv"] {
+    for f in [
+        "points.las",
+        "points.xyz",
+        "summary.json",
+        "trajectory.csv",
+        "report.html",
+        "survey.toml",
+    ] {
         assert!(out.join(f).exists(), "{f} missing");
         assert!(!out.join(format!("{f}.partial")).exists());
     }
@@ -234,6 +241,12 @@ fn good_survey_runs_and_check_predicts_it() {
         assert!(summary.get(key).is_some(), "summary lacks {key}");
     }
     assert_eq!(summary["pulses"], 8000);
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(report.matches("data:image/png;base64,").count() >= 6);
+    assert!(
+        !report.contains("http://") && !report.contains("https://"),
+        "self-contained"
+    );
     assert_eq!(summary["seed"], 3);
     let swath = 2.0 * 300.0 * 15f64.to_radians().tan();
     assert!((summary["swath_width_m"].as_f64().unwrap() - swath).abs() < 1e-6);

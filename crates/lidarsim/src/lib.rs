@@ -59,6 +59,7 @@ pub mod plan;
 pub mod platform;
 pub mod radiometry;
 pub mod render;
+pub mod report;
 pub mod rng;
 pub mod run;
 pub mod scanner;

@@ -122,19 +122,21 @@ impl Image {
         }
     }
 
-    /// Saves as an 8-bit RGB PNG.
-    pub fn save_png(&self, path: &Path) -> io::Result<()> {
-        let file = std::fs::File::create(path)?;
-        let mut enc = png::Encoder::new(
-            io::BufWriter::new(file),
-            self.width as u32,
-            self.height as u32,
-        );
+    /// The image as an 8-bit RGB PNG.
+    pub fn to_png(&self) -> io::Result<Vec<u8>> {
+        let mut bytes = Vec::new();
+        let mut enc = png::Encoder::new(&mut bytes, self.width as u32, self.height as u32);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
         let mut w = enc.write_header().map_err(io::Error::other)?;
         w.write_image_data(&self.rgb).map_err(io::Error::other)?;
-        w.finish().map_err(io::Error::other)
+        w.finish().map_err(io::Error::other)?;
+        Ok(bytes)
+    }
+
+    /// Saves as an 8-bit RGB PNG (written whole, then renamed into place).
+    pub fn save_png(&self, path: &Path) -> io::Result<()> {
+        crate::output::write_atomic(path, &self.to_png()?)
     }
 }
 
@@ -217,13 +219,45 @@ fn robust_range(mut v: Vec<f64>) -> (f64, f64) {
 }
 
 /// How each point is coloured, and the legend that explains it.
-struct Palette {
+pub struct Palette {
+    title: Option<&'static str>,
     by: ColorBy,
     range: (f64, f64),
     entries: Vec<([u8; 3], String)>,
 }
 
 impl Palette {
+    /// A colour bar over `range` (height or intensity).
+    pub fn bar(by: ColorBy, range: (f64, f64)) -> Self {
+        Self {
+            title: None,
+            by,
+            range,
+            entries: Vec::new(),
+        }
+    }
+
+    /// A legend of the given ASPRS classes.
+    pub fn classes(classes: &[u8]) -> Self {
+        Self {
+            title: None,
+            by: ColorBy::Class,
+            range: (0.0, 1.0),
+            entries: classes
+                .iter()
+                .map(|c| {
+                    let (col, name) = class_color(*c);
+                    (col, format!("{c} {name}"))
+                })
+                .collect(),
+        }
+    }
+
+    /// The colour of a value on a colour bar.
+    pub fn bar_color(&self, v: f64) -> [u8; 3] {
+        ramp((v - self.range.0) / (self.range.1 - self.range.0))
+    }
+
     fn new(points: &[RenderPoint], by: ColorBy) -> Self {
         let mut entries = Vec::new();
         let range = match by {
@@ -264,7 +298,20 @@ impl Palette {
                 (0.0, 1.0)
             }
         };
-        Self { by, range, entries }
+        Self {
+            title: None,
+            by,
+            range,
+            entries,
+        }
+    }
+
+    /// The same palette with another title over its colour bar.
+    pub fn titled(self, title: &'static str) -> Self {
+        Self {
+            title: Some(title),
+            ..self
+        }
     }
 
     fn color(&self, p: &RenderPoint) -> [u8; 3] {
@@ -284,16 +331,12 @@ impl Palette {
             ColorBy::Height | ColorBy::Intensity => {
                 let unit = if self.by == ColorBy::Height { " M" } else { "" };
                 let (y0, y1) = (top + 20, bottom.saturating_sub(20).max(top + 40));
-                img.text(
-                    x0,
-                    top + 4,
-                    if self.by == ColorBy::Height {
-                        "HEIGHT"
-                    } else {
-                        "INTENSITY"
-                    },
-                    INK,
-                );
+                let title = self.title.unwrap_or(if self.by == ColorBy::Height {
+                    "HEIGHT"
+                } else {
+                    "INTENSITY"
+                });
+                img.text(x0, top + 4, title, INK);
                 for y in y0..y1 {
                     let v = 1.0 - (y - y0) as f64 / (y1 - y0 - 1).max(1) as f64;
                     img.fill(x0, y, 24, 1, ramp(v));
@@ -348,6 +391,21 @@ fn scale_bar(img: &mut Image, x0: usize, y: usize, map_width_px: usize, resoluti
     img.fill(x0, y - 4, 2, 8, INK);
     img.fill(x0 + px.saturating_sub(2), y - 4, 2, 8, INK);
     img.text(x0 + px + 8, y - 2, &format!("{len} M"), INK);
+}
+
+/// A finished picture: the `map` (pixels), the palette's legend or colour
+/// bar to its right and a scale bar below, for `resolution_m` per pixel.
+pub fn framed(map: &Image, palette: &Palette, resolution_m: f64) -> Image {
+    let (w, h) = (map.width, map.height);
+    let mut img = Image::new(w + LEGEND_WIDTH, (h + FOOTER_HEIGHT).max(200), BACKGROUND);
+    for y in 0..h {
+        let row = 3 * y * w;
+        let dst = 3 * y * img.width;
+        img.rgb[dst..dst + 3 * w].copy_from_slice(&map.rgb[row..row + 3 * w]);
+    }
+    palette.draw(&mut img, w + 10, 0, h.max(200 - FOOTER_HEIGHT));
+    scale_bar(&mut img, 10, h + 18, w, resolution_m);
+    img
 }
 
 /// A top view: for every pixel the highest point's colour.
@@ -532,6 +590,39 @@ const PLOT_LEFT: usize = 60;
 const PLOT_TOP: usize = 20;
 
 impl WaveformPlot {
+    /// Simulates pulse `k` of `line` again and collects its waveform, the
+    /// detection threshold and the echoes.
+    pub fn of_pulse(
+        sim: &crate::sim::Simulator<'_>,
+        line: &crate::platform::FlightLine,
+        k: u64,
+    ) -> (Self, crate::sim::Scratch) {
+        let mut scratch = crate::sim::Scratch::default();
+        sim.simulate_pulse(line, k, &mut scratch, &mut Vec::new());
+        let wf = scratch.waveform();
+        let bin_s = sim.receiver().config().bin_s;
+        let threshold = sim.detector().threshold();
+        let background_at = |bin: f64| {
+            let i =
+                (bin.round() as i64 - wf.first_bin).clamp(0, wf.background.len().max(1) as i64 - 1);
+            wf.background.get(i as usize).copied().unwrap_or(0.0)
+        };
+        let plot = Self {
+            ranges_m: (0..wf.samples.len())
+                .map(|i| crate::waveform::bin_to_range((wf.first_bin + i as i64) as f64, bin_s))
+                .collect(),
+            signal: wf.samples.clone(),
+            returns: wf.impulses.clone(),
+            threshold: wf.background.iter().map(|b| b + threshold).collect(),
+            echoes: scratch
+                .echoes()
+                .iter()
+                .map(|e| (e.range_m, e.peak_amplitude + background_at(e.bin)))
+                .collect(),
+        };
+        (plot, scratch)
+    }
+
     /// Largest value shown on the vertical axis.
     pub fn y_max(&self) -> f64 {
         let m = self

@@ -9,6 +9,7 @@ use crate::accel::{Bvh, RayCaster};
 use crate::navigation::observed_pose;
 use crate::output::{AtomicFile, LasSettings, LasWriter, PointSink, XyzWriter, write_atomic};
 use crate::plan::{Plan, plan};
+use crate::report::ReportSink;
 use crate::sim::{RunCounts, Simulator, Timer};
 use crate::survey::Survey;
 
@@ -144,10 +145,12 @@ pub fn run_to_dir(
         files.push(name.to_string());
     }
 
+    let mut report = ReportSink::new(covered_area(survey, &bvh, &plan), plan.point_density_per_m2);
     let sim = Simulator::new(survey, &bvh);
     let timer = Timer::start();
     let mut refs: Vec<&mut (dyn PointSink + 'static)> =
         sinks.iter_mut().map(|b| b.as_mut()).collect();
+    refs.push(&mut report);
     let result = sim.run(options.threads, &mut refs, options.progress);
     drop(refs);
     let counts = match result {
@@ -163,6 +166,7 @@ pub fn run_to_dir(
         s.finish().map_err(io_err(out_dir))?;
     }
     let wall_time_s = timer.seconds();
+    files.push("report.html".to_string());
     files.push("summary.json".to_string());
     let summary = summarize(
         survey,
@@ -174,6 +178,28 @@ pub fn run_to_dir(
         files,
         bvh.scene().primitives.len(),
     );
+    // The report, with the waveforms of a pulse with the most echoes and of
+    // a single-echo pulse, simulated again.
+    let mut waveforms = Vec::new();
+    let picks = [
+        report
+            .richest_pulse
+            .map(|(l, k, n)| (l, k, format!("{n} echoes"))),
+        report
+            .single_pulse
+            .map(|(l, k)| (l, k, "a single echo".to_string())),
+    ];
+    for (l, k, what) in picks.into_iter().flatten() {
+        if let Some(line) = survey.lines.get(l as usize) {
+            let (plot, _) = crate::render::WaveformPlot::of_pulse(&sim, line, k);
+            waveforms.push((format!("Line {} pulse {k}: {what}", l + 1), plot));
+        }
+    }
+    let report_path = out_dir.join("report.html");
+    let page =
+        crate::report::html(survey, &summary, &report, &waveforms).map_err(io_err(&report_path))?;
+    write_atomic(&report_path, page.as_bytes()).map_err(io_err(&report_path))?;
+
     let json = serde_json::to_vec_pretty(&summary).map_err(|e| io_err(&summary_path)(e.into()))?;
     write_atomic(&summary_path, &json).map_err(io_err(&summary_path))?;
     Ok(summary)
@@ -228,6 +254,34 @@ fn summarize(
         warnings: survey.warnings.clone(),
         forest_trees: survey.forest_trees.clone(),
         plan,
+    }
+}
+
+/// The part of the scene the flight lines can see: each line's bounding box
+/// widened by half its swath and 10 m, within the scene's bounds (x, y).
+fn covered_area(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> crate::geometry::Aabb {
+    use crate::geometry::{Aabb, DVec3};
+    let scene = caster.scene().bounds();
+    let mut area = Aabb::EMPTY;
+    for (line, lp) in survey.lines.iter().zip(&plan.lines) {
+        let m = DVec3::new(
+            lp.swath_width_m / 2.0 + 10.0,
+            lp.swath_width_m / 2.0 + 10.0,
+            0.0,
+        );
+        area = area
+            .union_point(line.start_m.min(line.end_m) - m)
+            .union_point(line.start_m.max(line.end_m) + m);
+    }
+    if scene.is_empty() || area.is_empty() {
+        return if scene.is_empty() { area } else { scene };
+    }
+    let min = area.min.max(scene.min);
+    let max = area.max.min(scene.max);
+    if min.x < max.x && min.y < max.y {
+        Aabb { min, max }
+    } else {
+        scene
     }
 }
 
