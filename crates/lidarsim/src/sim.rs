@@ -476,6 +476,17 @@ impl<'a> Simulator<'a> {
     }
 }
 
+/// Simulates a whole survey into memory on `threads` threads: a BVH over
+/// its scene, every pulse, the points in pulse order. For tests and small
+/// surveys; [`crate::run::run_to_dir`] streams to files instead.
+pub fn simulate_to_memory(survey: &Survey, threads: usize) -> io::Result<Vec<PointRecord>> {
+    let bvh = crate::accel::Bvh::build(survey.scene.clone());
+    let sim = Simulator::new(survey, &bvh);
+    let mut sink = crate::output::MemorySink::default();
+    sim.run(threads, &mut [&mut sink], &|_| {})?;
+    Ok(sink.points)
+}
+
 /// Wall-clock timing helper for summaries.
 #[derive(Debug)]
 pub struct Timer(Instant);

@@ -2,9 +2,8 @@
 //! cast from the true pose, points computed from the observed one.
 
 use lidarsim::Survey;
-use lidarsim::accel::Bvh;
-use lidarsim::output::{MemorySink, PointRecord};
-use lidarsim::sim::Simulator;
+use lidarsim::output::PointRecord;
+use lidarsim::sim::simulate_to_memory;
 
 const H: f64 = 500.0;
 
@@ -34,11 +33,7 @@ vertices_m = [[-1000, -1000, 0], [1000, -1000, 0], [1000, 1000, 0], [-1000, 1000
 }
 
 fn simulate(s: &Survey) -> Vec<PointRecord> {
-    let bvh = Bvh::build(s.scene.clone());
-    let sim = Simulator::new(s, &bvh);
-    let mut sink = MemorySink::default();
-    sim.run(2, &mut [&mut sink], &|_| {}).unwrap();
-    sink.points
+    simulate_to_memory(s, 2).unwrap()
 }
 
 /// Points of the error-free survey and of the one with `extra`, pulse by

@@ -5,8 +5,8 @@
 
 use lidarsim::Survey;
 use lidarsim::accel::Bvh;
-use lidarsim::output::{MemorySink, PointRecord};
-use lidarsim::sim::Simulator;
+use lidarsim::output::PointRecord;
+use lidarsim::sim::simulate_to_memory;
 
 /// A survey over a square ground plane, with extra TOML appended.
 fn survey(scanner: &str, lines: &str, extra: &str) -> Survey {
@@ -35,11 +35,7 @@ fn north_line(x: f64, y0: f64, y1: f64, z: f64, v: f64) -> String {
 }
 
 fn simulate(s: &Survey, threads: usize) -> Vec<PointRecord> {
-    let bvh = Bvh::build(s.scene.clone());
-    let sim = Simulator::new(s, &bvh);
-    let mut sink = MemorySink::default();
-    sim.run(threads, &mut [&mut sink], &|_| {}).unwrap();
-    sink.points
+    simulate_to_memory(s, threads).unwrap()
 }
 
 fn rel(a: f64, b: f64) -> f64 {

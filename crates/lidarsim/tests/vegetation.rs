@@ -4,9 +4,9 @@
 use lidarsim::Survey;
 use lidarsim::accel::{BruteForce, Bvh, RayCaster};
 use lidarsim::geometry::{DVec3, Ray};
-use lidarsim::output::{MemorySink, PointRecord};
+use lidarsim::output::PointRecord;
 use lidarsim::scene::{Shape, Species};
-use lidarsim::sim::{COMPONENT_FOLIAGE, COMPONENT_TRUNK, Simulator};
+use lidarsim::sim::{COMPONENT_FOLIAGE, COMPONENT_TRUNK, simulate_to_memory};
 
 /// A survey with one northbound line at `x` from `y = -half` to `half`,
 /// flown at `speed` m/s, 500 m above flat ground.
@@ -34,11 +34,7 @@ vertices_m = [[-200, -200, 0], [200, -200, 0], [200, 200, 0], [-200, 200, 0]]
 }
 
 fn simulate(s: &Survey) -> Vec<PointRecord> {
-    let bvh = Bvh::build(s.scene.clone());
-    let sim = Simulator::new(s, &bvh);
-    let mut sink = MemorySink::default();
-    sim.run(2, &mut [&mut sink], &|_| {}).unwrap();
-    sink.points
+    simulate_to_memory(s, 2).unwrap()
 }
 
 /// Pulses grouped: (number of returns, classes) of each pulse.
