@@ -6,7 +6,8 @@
 //!
 //! The pictures are accumulated while the points stream past
 //! ([`ReportSink`] is a [`PointSink`]): per pixel the highest point and a
-//! count, so memory depends on the area, not on the length of the flight.
+//! count, on at most 500 000 pixels (coarser for large areas), so memory is
+//! bounded whatever the area or the length of the flight.
 
 use std::fmt::Write as _;
 use std::io;
@@ -18,11 +19,11 @@ use crate::run::Summary;
 use crate::survey::Survey;
 
 /// Largest number of pixels of the report's maps.
-const MAX_PIXELS: usize = 4_000_000;
+const MAX_PIXELS: usize = 500_000;
 /// Side of the cells of the density map, m.
 const DENSITY_CELL_M: f64 = 5.0;
 /// Largest number of points kept for the cross-section.
-const MAX_PROFILE_POINTS: usize = 2_000_000;
+const MAX_PROFILE_POINTS: usize = 200_000;
 
 /// Collects what the report shows while points are written.
 #[derive(Debug)]
