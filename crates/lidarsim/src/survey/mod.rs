@@ -176,6 +176,43 @@ pub struct Survey {
     pub source: Option<PathBuf>,
 }
 
+/// Adds "did you mean" to an unknown-field message when one of the
+/// expected names is within two edits of the one given.
+fn with_hint(message: &str) -> String {
+    let Some(rest) = message.strip_prefix("unknown field `") else {
+        return message.to_string();
+    };
+    let Some((given, expected)) = rest.split_once('`') else {
+        return message.to_string();
+    };
+    let best = expected
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .map(|name| (edit_distance(given, name), name))
+        .min();
+    match best {
+        Some((d, name)) if d <= 2 => format!("{message} (did you mean `{name}`?)"),
+        _ => message.to_string(),
+    }
+}
+
+/// Levenshtein distance between two short strings.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}
+
 /// Collects problems with their key paths during validation.
 struct Checker {
     problems: Vec<(KeyPath, String)>,
@@ -1027,7 +1064,7 @@ impl Survey {
                     line,
                     column,
                     key,
-                    message: e.message().trim().to_string(),
+                    message: with_hint(e.message().trim()),
                     source_line: Some(locator.line_text(line).to_string()),
                 }],
             }
@@ -1797,6 +1834,14 @@ vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
         let d = diagnostics(&unknown);
         assert_eq!(d[0].line, 2);
         assert!(d[0].message.contains("prff_hz"), "{}", d[0].message);
+        assert!(
+            d[0].message.ends_with("(did you mean `prf_hz`?)"),
+            "{}",
+            d[0].message
+        );
+        let far = diagnostics(&format!("[scanner]\nbananas = 3\n{MINIMAL}"));
+        assert!(!far[0].message.contains("did you mean"));
+        assert_eq!(edit_distance("scan_angel_deg", "scan_angle_deg"), 2);
         assert!(d[0].key.contains("scanner"), "{}", d[0].key);
 
         let wrong_type = format!("[scanner]\nprf_hz = \"fast\"\n{MINIMAL}");
