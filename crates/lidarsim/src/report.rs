@@ -160,8 +160,8 @@ impl ReportSink {
     }
 
     /// Point density (points per m², all returns) in cells of about 5 m,
-    /// on a colour bar from 0 to twice `planned`, and the median over cells
-    /// with points.
+    /// on a colour bar from 0 to twice `planned` (or the 98th percentile of
+    /// the cells if higher), and the median over cells with points.
     pub fn density_map(&self, planned: f64) -> (Image, f64) {
         let b = ((DENSITY_CELL_M / self.resolution_m).round() as usize).max(1);
         let (cw, ch) = (self.width.div_ceil(b), self.height.div_ceil(b));
@@ -170,12 +170,6 @@ impl ReportSink {
             cells[(k / self.width / b) * cw + (k % self.width) / b] += u64::from(c);
         }
         let area = (b as f64 * self.resolution_m).powi(2);
-        let p =
-            Palette::bar(ColorBy::Intensity, (0.0, 2.0 * planned.max(1e-9))).titled("POINTS/M²");
-        let map = self.map(|k| {
-            let c = cells[(k / self.width / b) * cw + (k % self.width) / b];
-            (c > 0).then(|| p.bar_color(c as f64 / area))
-        });
         // The median over cells with points: cells cut by the edge of the
         // area or of the swath would drag a mean down.
         let mut filled: Vec<f64> = cells
@@ -185,6 +179,18 @@ impl ReportSink {
             .collect();
         filled.sort_by(f64::total_cmp);
         let median = filled.get(filled.len() / 2).copied().unwrap_or(0.0);
+        // Up to twice the plan, or further where overlaps and canopy echoes
+        // go beyond that (98th percentile).
+        let p98 = filled
+            .get((filled.len().saturating_sub(1) as f64 * 0.98) as usize)
+            .copied()
+            .unwrap_or(0.0);
+        let top = (2.0 * planned).max(p98).max(1e-9);
+        let p = Palette::bar(ColorBy::Intensity, (0.0, top)).titled("POINTS/M²");
+        let map = self.map(|k| {
+            let c = cells[(k / self.width / b) * cw + (k % self.width) / b];
+            (c > 0).then(|| p.bar_color(c as f64 / area))
+        });
         (framed(&map, &p, self.resolution_m), median)
     }
 
@@ -392,7 +398,7 @@ pub fn html(
     let (density, mean) = sink.density_map(summary.point_density_per_m2);
     let _ = write!(
         h,
-        "<h2>Point density</h2><p>All returns per m², colour bar from 0 to twice the planned \
+        "<h2>Point density</h2><p>All returns per m², colour bar from 0 to at least twice the planned \
          single-line density of {:.2} /m² (overlapping lines add up). Median over cells of about \
          5 m with points: {:.2} /m².</p>{}",
         summary.point_density_per_m2,
