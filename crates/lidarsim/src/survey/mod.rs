@@ -364,10 +364,10 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
     let deg = 1f64.to_radians();
     let group = |c: &mut Checker, key: &str, r: &raw::RawErrors, base: ErrorModel| {
         let p = root.key(key);
-        let own = lookup(c, p.key("preset"), &r.preset);
-        let base = match own {
+        let gnss = key == "gnss";
+        let base = match lookup(c, p.key("preset"), &r.preset) {
             Some((g, i)) => {
-                if key == "gnss" {
+                if gnss {
                     g
                 } else {
                     i
@@ -375,54 +375,35 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
             }
             None => base,
         };
-        let (bias, sigma, walk, scale, unit_keys) = if key == "gnss" {
-            (
-                &r.bias_m,
-                &r.sigma_m,
-                &r.random_walk_m,
-                1.0,
-                ["bias_deg", "sigma_deg", "random_walk_deg"],
-            )
+        // [gnss] takes metres, [imu] degrees: the other unit's keys exist in
+        // the shared raw table but are errors here.
+        let (bias, sigma, walk, scale) = if gnss {
+            (&r.bias_m, &r.sigma_m, &r.random_walk_m, 1.0)
         } else {
-            (
-                &r.bias_deg,
-                &r.sigma_deg,
-                &r.random_walk_deg,
-                deg,
-                ["bias_m", "sigma_m", "random_walk_m"],
-            )
+            (&r.bias_deg, &r.sigma_deg, &r.random_walk_deg, deg)
         };
-        let wrong_unit = [
-            r.bias_deg.is_some(),
-            r.sigma_deg.is_some(),
-            r.random_walk_deg.is_some(),
-        ];
-        let wrong_unit_m = [
-            r.bias_m.is_some(),
-            r.sigma_m.is_some(),
-            r.random_walk_m.is_some(),
-        ];
-        let wrong = if key == "gnss" {
-            wrong_unit
+        let other_unit = if gnss {
+            [
+                ("bias_deg", r.bias_deg.is_some()),
+                ("sigma_deg", r.sigma_deg.is_some()),
+                ("random_walk_deg", r.random_walk_deg.is_some()),
+            ]
         } else {
-            wrong_unit_m
+            [
+                ("bias_m", r.bias_m.is_some()),
+                ("sigma_m", r.sigma_m.is_some()),
+                ("random_walk_m", r.random_walk_m.is_some()),
+            ]
         };
-        for (k, w) in unit_keys.iter().zip(wrong) {
-            if w {
-                c.err(
-                    p.key(k),
-                    format!(
-                        "[{key}] takes {}",
-                        if key == "gnss" {
-                            "metres (_m keys)"
-                        } else {
-                            "degrees (_deg keys)"
-                        }
-                    ),
-                );
-            }
+        for (k, _) in other_unit.iter().filter(|(_, set)| *set) {
+            let unit = if gnss {
+                "metres (_m keys)"
+            } else {
+                "degrees (_deg keys)"
+            };
+            c.err(p.key(k), format!("[{key}] takes {unit}"));
         }
-        let suffix = if key == "gnss" { "_m" } else { "_deg" };
+        let suffix = if gnss { "_m" } else { "_deg" };
         let mut m = base;
         if bias.is_some() {
             m.bias = triple(c, p.key(&format!("bias{suffix}")), bias, scale);
