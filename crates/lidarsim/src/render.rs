@@ -204,7 +204,7 @@ fn strip_color(source: u16) -> [u8; 3] {
 }
 
 /// A value range from the 2nd to the 98th percentile.
-fn robust_range(mut v: Vec<f64>) -> (f64, f64) {
+pub(crate) fn robust_range(mut v: Vec<f64>) -> (f64, f64) {
     if v.is_empty() {
         return (0.0, 1.0);
     }

@@ -104,28 +104,14 @@ impl ReportSink {
         img
     }
 
-    fn robust(values: impl Iterator<Item = f64>) -> (f64, f64) {
-        let mut v: Vec<f64> = values.collect();
-        if v.is_empty() {
-            return (0.0, 1.0);
-        }
-        v.sort_by(f64::total_cmp);
-        let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
-        let (lo, hi) = (at(0.02), at(0.98));
-        if hi > lo {
-            (lo, hi)
-        } else {
-            (lo - 0.5, lo + 0.5)
-        }
-    }
-
     /// Top view by height.
     pub fn height_map(&self) -> Image {
         let filled = |k: usize| self.top_z[k] > f32::NEG_INFINITY;
-        let range = Self::robust(
+        let range = crate::render::robust_range(
             (0..self.top_z.len())
                 .filter(|&k| filled(k))
-                .map(|k| f64::from(self.top_z[k])),
+                .map(|k| f64::from(self.top_z[k]))
+                .collect(),
         );
         let p = Palette::bar(ColorBy::Height, range);
         let map = self.map(|k| filled(k).then(|| p.bar_color(f64::from(self.top_z[k]))));
@@ -135,10 +121,11 @@ impl ReportSink {
     /// Top view by intensity.
     pub fn intensity_map(&self) -> Image {
         let filled = |k: usize| self.top_z[k] > f32::NEG_INFINITY;
-        let range = Self::robust(
+        let range = crate::render::robust_range(
             (0..self.top_z.len())
                 .filter(|&k| filled(k))
-                .map(|k| f64::from(self.top_intensity[k])),
+                .map(|k| f64::from(self.top_intensity[k]))
+                .collect(),
         );
         let p = Palette::bar(ColorBy::Intensity, range);
         let map = self.map(|k| filled(k).then(|| p.bar_color(f64::from(self.top_intensity[k]))));
