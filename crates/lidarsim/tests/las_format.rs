@@ -15,6 +15,22 @@ fn out_dir(name: &str) -> PathBuf {
 
 const H: f64 = 500.0;
 
+/// Runs the flat survey (with `extra` in its `[output]` table or after it)
+/// into a fresh directory named after `name`.
+fn run_flat(extra: &str, name: &str, threads: usize) -> (PathBuf, lidarsim::run::Summary) {
+    let dir = out_dir(name);
+    let summary = run_to_dir(
+        &flat_survey(extra),
+        &dir,
+        &RunOptions {
+            threads,
+            progress: &|_| {},
+        },
+    )
+    .unwrap();
+    (dir, summary)
+}
+
 fn flat_survey(extra: &str) -> Survey {
     let text = format!(
         r#"
@@ -43,17 +59,7 @@ vertices_m = [[0, 1000, 0], [2000, 1000, 0], [2000, 3000, 0], [0, 3000, 0]]
 
 #[test]
 fn las_header_and_points_read_back_with_an_independent_reader() {
-    let survey = flat_survey("");
-    let dir = out_dir("las");
-    let summary = run_to_dir(
-        &survey,
-        &dir,
-        &RunOptions {
-            threads: 2,
-            progress: &|_| {},
-        },
-    )
-    .unwrap();
+    let (dir, summary) = run_flat("", "las", 2);
 
     let mut reader = las::Reader::from_path(dir.join("points.las")).unwrap();
     let header = reader.header().clone();
@@ -158,17 +164,7 @@ fn las_header_and_points_read_back_with_an_independent_reader() {
 
 #[test]
 fn raw_header_bytes_follow_the_specification() {
-    let survey = flat_survey("gps_start_time_s = 400000000.0");
-    let dir = out_dir("raw");
-    let summary = run_to_dir(
-        &survey,
-        &dir,
-        &RunOptions {
-            threads: 1,
-            progress: &|_| {},
-        },
-    )
-    .unwrap();
+    let (dir, summary) = run_flat("gps_start_time_s = 400000000.0", "raw", 1);
     let bytes = std::fs::read(dir.join("points.las")).unwrap();
     let u16_at = |o: usize| u16::from_le_bytes([bytes[o], bytes[o + 1]]);
     let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
@@ -196,17 +192,7 @@ fn raw_header_bytes_follow_the_specification() {
 
 #[test]
 fn error_vectors_are_extra_bytes_with_a_descriptor() {
-    let survey = flat_survey("[gnss]\nbias_m = [0.25, -0.5, 0.125]");
-    let dir = out_dir("extra");
-    let summary = run_to_dir(
-        &survey,
-        &dir,
-        &RunOptions {
-            threads: 2,
-            progress: &|_| {},
-        },
-    )
-    .unwrap();
+    let (dir, summary) = run_flat("[gnss]\nbias_m = [0.25, -0.5, 0.125]", "extra", 2);
     let mut reader = las::Reader::from_path(dir.join("points.las")).unwrap();
     let header = reader.header().clone();
     // Point format 6 with 12 extra bytes, described by one Extra Bytes VLR

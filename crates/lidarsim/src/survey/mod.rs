@@ -464,6 +464,58 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
     }
 }
 
+/// An outline in plan, from exactly one of `rectangle_m = [x_min, y_min,
+/// x_max, y_max]` or `area_m = [[x, y], ...]` of the table at `path`
+/// (`[plan]`, `[[forest]]`).
+fn outline(
+    c: &mut Checker,
+    path: &KeyPath,
+    rectangle: &Option<Vec<f64>>,
+    area: &Option<Vec<Vec<f64>>>,
+) -> Option<Vec<[f64; 2]>> {
+    match (rectangle, area) {
+        (Some(r), None) => {
+            if r.len() != 4 || r.iter().any(|v| !v.is_finite()) || r[2] <= r[0] || r[3] <= r[1] {
+                c.err(
+                    path.key("rectangle_m"),
+                    "must be [x_min, y_min, x_max, y_max] with x_max > x_min and y_max > y_min",
+                );
+                None
+            } else {
+                Some(vec![[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]])
+            }
+        }
+        (None, Some(a)) => {
+            if a.len() < 3
+                || a.iter()
+                    .any(|p| p.len() != 2 || p.iter().any(|v| !v.is_finite()))
+            {
+                c.err(
+                    path.key("area_m"),
+                    "must be a list of at least 3 [x, y] points (the outline)",
+                );
+                None
+            } else {
+                Some(a.iter().map(|p| [p[0], p[1]]).collect())
+            }
+        }
+        (Some(_), Some(_)) => {
+            c.err(
+                path.key("area_m"),
+                "give either rectangle_m or area_m, not both",
+            );
+            None
+        }
+        (None, None) => {
+            c.err(
+                path.clone(),
+                "needs rectangle_m = [x_min, y_min, x_max, y_max] or area_m = [[x, y], ...]",
+            );
+            None
+        }
+    }
+}
+
 /// Validates `[plan]` and generates its lines.
 fn check_plan(
     c: &mut Checker,
@@ -472,38 +524,7 @@ fn check_plan(
     scan_half_angle_rad: f64,
 ) -> Vec<(DVec3, DVec3, f64)> {
     let pp = KeyPath::root().key("plan");
-    let area = match (&plan.rectangle_m, &plan.area_m) {
-        (Some(r), None)
-            if r.len() == 4 && r.iter().all(|v| v.is_finite()) && r[2] > r[0] && r[3] > r[1] =>
-        {
-            Some(vec![[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]])
-        }
-        (Some(_), None) => {
-            c.err(
-                pp.key("rectangle_m"),
-                "must be [x_min, y_min, x_max, y_max]",
-            );
-            None
-        }
-        (None, Some(a))
-            if a.len() >= 3
-                && a.iter()
-                    .all(|p| p.len() == 2 && p.iter().all(|v| v.is_finite())) =>
-        {
-            Some(a.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>())
-        }
-        (None, Some(_)) => {
-            c.err(
-                pp.key("area_m"),
-                "must be a list of at least 3 [x, y] points",
-            );
-            None
-        }
-        _ => {
-            c.err(pp.clone(), "needs exactly one of rectangle_m or area_m");
-            None
-        }
-    };
+    let area = outline(c, &pp, &plan.rectangle_m, &plan.area_m);
     if plan.altitude_m.is_none() {
         c.err(
             pp.key("altitude_m"),
@@ -847,47 +868,7 @@ fn check_forest(
     survey_seed: u64,
     index: usize,
 ) -> Option<ForestSpec> {
-    let area = match (&f.rectangle_m, &f.area_m) {
-        (Some(r), None) => {
-            if r.len() != 4 || r.iter().any(|v| !v.is_finite()) || r[2] <= r[0] || r[3] <= r[1] {
-                c.err(
-                    fp.key("rectangle_m"),
-                    "must be [x_min, y_min, x_max, y_max] with x_max > x_min and y_max > y_min",
-                );
-                None
-            } else {
-                Some(vec![[r[0], r[1]], [r[2], r[1]], [r[2], r[3]], [r[0], r[3]]])
-            }
-        }
-        (None, Some(a)) => {
-            if a.len() < 3
-                || a.iter()
-                    .any(|p| p.len() != 2 || p.iter().any(|v| !v.is_finite()))
-            {
-                c.err(
-                    fp.key("area_m"),
-                    "must be a list of at least 3 [x, y] points (the stand's outline)",
-                );
-                None
-            } else {
-                Some(a.iter().map(|p| [p[0], p[1]]).collect::<Vec<_>>())
-            }
-        }
-        (Some(_), Some(_)) => {
-            c.err(
-                fp.key("area_m"),
-                "give either rectangle_m or area_m, not both",
-            );
-            None
-        }
-        (None, None) => {
-            c.err(
-                fp.clone(),
-                "needs rectangle_m = [x_min, y_min, x_max, y_max] or area_m = [[x, y], ...]",
-            );
-            None
-        }
-    };
+    let area = outline(c, fp, &f.rectangle_m, &f.area_m);
     if f.stems_per_ha.is_none() {
         c.err(
             fp.key("stems_per_ha"),
