@@ -103,6 +103,21 @@ enum Command {
         #[arg(long, value_name = "X0,Y0,X1,Y1,WIDTH", allow_hyphen_values = true)]
         profile: Option<String>,
     },
+    /// Measure speed on the benchmark scenes (flat, 1 M-triangle terrain).
+    Bench {
+        /// Write the scenes (OBJ) and surveys (TOML) into DIR and stop.
+        #[arg(long, value_name = "DIR")]
+        export: Option<PathBuf>,
+        /// Scenes to measure: flat, terrain (default both).
+        #[arg(long, value_delimiter = ',')]
+        scene: Vec<String>,
+        /// Thread counts to run (default 1,2).
+        #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2])]
+        threads: Vec<usize>,
+        /// Working directory for the generated files (default: a temporary one).
+        #[arg(long, value_name = "DIR")]
+        work_dir: Option<PathBuf>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -172,6 +187,15 @@ fn main() -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err((code, msg)) => fail(code, &msg),
         },
+        Command::Bench {
+            export,
+            scene,
+            threads,
+            work_dir,
+        } => match bench(export, &scene, &threads, work_dir) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(msg) => fail(1, &msg),
+        },
         Command::Check { survey } => match Survey::load(&survey) {
             Ok(s) => {
                 warn(&s);
@@ -181,6 +205,85 @@ fn main() -> ExitCode {
             Err(e) => fail_survey(&e),
         },
     }
+}
+
+/// `lidarsim bench`: export the scenes, or measure them and print one
+/// `key value` line per figure.
+fn bench(
+    export: Option<PathBuf>,
+    scenes: &[String],
+    threads: &[usize],
+    work_dir: Option<PathBuf>,
+) -> Result<(), String> {
+    use lidarsim::bench::{BenchScene, export as export_scene, measure};
+    let scenes: Vec<BenchScene> = if scenes.is_empty() {
+        BenchScene::ALL.to_vec()
+    } else {
+        scenes
+            .iter()
+            .map(|n| {
+                BenchScene::from_name(n)
+                    .ok_or_else(|| format!("unknown bench scene '{n}'; expected flat or terrain"))
+            })
+            .collect::<Result<_, _>>()?
+    };
+    if let Some(dir) = export {
+        for s in &scenes {
+            let path = export_scene(*s, &dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            println!("exported {}", path.display());
+        }
+        return Ok(());
+    }
+    let (dir, temporary) = match work_dir {
+        Some(d) => (d, false),
+        None => (
+            std::env::temp_dir().join(format!("lidarsim-bench-{}", std::process::id())),
+            true,
+        ),
+    };
+    let result = (|| {
+        for s in &scenes {
+            let survey = export_scene(*s, &dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            let f = measure(*s, &survey, &dir, threads)?;
+            let name = s.name();
+            println!("{name} primitives {}", f.primitives);
+            println!("{name} load_s {:.3}", f.parse_s + f.build_s);
+            println!("{name} parse_s {:.3}", f.parse_s);
+            println!("{name} build_s {:.3}", f.build_s);
+            for r in &f.runs {
+                let t = r.threads;
+                println!("{name} threads {t} pulses {}", r.pulses);
+                println!("{name} threads {t} seconds {:.3}", r.seconds);
+                println!("{name} threads {t} pulses_per_s {:.0}", r.pulses_per_s());
+                println!(
+                    "{name} threads {t} rays_per_s {:.0}",
+                    r.rays as f64 / r.seconds
+                );
+                println!(
+                    "{name} threads {t} points_per_s {:.0}",
+                    r.points as f64 / r.seconds
+                );
+                println!("{name} threads {t} las_fnv1a {:016x}", r.las_hash);
+            }
+            if let [a, b, ..] = &f.runs[..] {
+                println!(
+                    "{name} scaling_{}_to_{} {:.2}",
+                    a.threads,
+                    b.threads,
+                    b.pulses_per_s() / a.pulses_per_s()
+                );
+                println!("{name} identical_output {}", a.las_hash == b.las_hash);
+            }
+            if let Some(bytes) = f.peak_rss_bytes {
+                println!("{name} peak_rss_mb {:.1}", bytes as f64 / 1048576.0);
+            }
+        }
+        Ok(())
+    })();
+    if temporary {
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    result
 }
 
 fn fail(code: u8, message: &str) -> ExitCode {

@@ -49,6 +49,7 @@
 #![deny(missing_docs)]
 
 pub mod accel;
+pub mod bench;
 pub mod canopy;
 pub mod demo;
 pub mod detection;

@@ -1,0 +1,411 @@
+//! The performance benchmark scenes and the measurement of a run on them.
+//!
+//! Two scenes, generated procedurally and written as OBJ meshes with a
+//! survey file so that other simulators can be run on identical input
+//! (`lidarsim bench --export DIR`):
+//!
+//! - **flat**: a 400 m × 400 m ground plane (reflectance 0.2) and five box
+//!   buildings (reflectance 0.5): 62 triangles.
+//! - **terrain**: a 708 × 708-vertex height grid (999 698 triangles) over
+//!   x, y ∈ [−200, 200] m with
+//!   `z = 10 + 8 sin(x/37) cos(y/53) + 4 sin((x+2y)/11) + 1.5 cos((3x−y)/4.3)
+//!   + 0.4 sin(1.7x) sin(1.3y)`, and the same five boxes standing on it.
+//!
+//! The survey is the reference simulator's benchmark: oscillating mirror,
+//! 100 kHz, 50 Hz, ±20°, 0.5 mrad divergence, 19 sub-rays, 4 ns pulse, full
+//! waveform, one 300 m line along +x at 500 m and 60 m/s (500 000 pulses),
+//! LAS output. [`measure`] loads the scene from its files (timed: OBJ
+//! parsing plus acceleration structure), runs the survey on 1 and 2 threads
+//! and reports rates and peak memory.
+
+use std::fmt::Write as _;
+use std::io::{self, BufWriter, Write};
+use std::path::Path;
+use std::time::Instant;
+
+use crate::Survey;
+use crate::accel::{Bvh, RayCaster};
+use crate::output::{LasWriter, PointSink};
+use crate::run::las_settings;
+use crate::sim::Simulator;
+
+/// A benchmark scene.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchScene {
+    /// Ground plane and five boxes (62 triangles).
+    Flat,
+    /// One-million-triangle height grid and five boxes.
+    Terrain,
+}
+
+impl BenchScene {
+    /// Both scenes, in the order they are measured.
+    pub const ALL: [BenchScene; 2] = [BenchScene::Flat, BenchScene::Terrain];
+
+    /// Name used on the command line and in file names.
+    pub fn name(self) -> &'static str {
+        match self {
+            BenchScene::Flat => "flat",
+            BenchScene::Terrain => "terrain",
+        }
+    }
+
+    /// Parses a name given by [`BenchScene::name`].
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|s| s.name() == name)
+    }
+}
+
+/// The five buildings: centre x, y; size x, y; height (m).
+pub const BOXES: [[f64; 5]; 5] = [
+    [-60.0, -50.0, 20.0, 30.0, 10.0],
+    [0.0, 40.0, 40.0, 20.0, 25.0],
+    [70.0, -20.0, 15.0, 15.0, 40.0],
+    [100.0, 90.0, 30.0, 30.0, 15.0],
+    [-110.0, 100.0, 25.0, 50.0, 8.0],
+];
+
+/// Vertices per side of the terrain grid.
+pub const TERRAIN_VERTICES: usize = 708;
+/// Half the side of both scenes, m.
+pub const HALF_SIDE_M: f64 = 200.0;
+
+/// Height of the benchmark terrain at (x, y), m.
+pub fn terrain_height(x: f64, y: f64) -> f64 {
+    10.0 + 8.0 * (x / 37.0).sin() * (y / 53.0).cos()
+        + 4.0 * ((x + 2.0 * y) / 11.0).sin()
+        + 1.5 * ((3.0 * x - y) / 4.3).cos()
+        + 0.4 * (1.7 * x).sin() * (1.3 * y).sin()
+}
+
+/// Writes a number the way OBJ files usually hold them: fixed point with
+/// millimetre-and-better precision, no exponent.
+fn push_coord(s: &mut String, v: f64) {
+    let _ = write!(s, "{v:.4}");
+}
+
+/// Writes the ground of `scene` as an OBJ file (group `ground`).
+pub fn write_ground_obj(scene: BenchScene, path: &Path) -> io::Result<()> {
+    let mut w = BufWriter::with_capacity(1 << 20, std::fs::File::create(path)?);
+    writeln!(w, "# lidarsim benchmark ground: {}", scene.name())?;
+    writeln!(w, "g ground")?;
+    let mut line = String::with_capacity(64);
+    match scene {
+        BenchScene::Flat => {
+            let h = HALF_SIDE_M;
+            for (x, y) in [(-h, -h), (h, -h), (h, h), (-h, h)] {
+                writeln!(w, "v {x} {y} 0")?;
+            }
+            writeln!(w, "f 1 2 3\nf 1 3 4")?;
+        }
+        BenchScene::Terrain => {
+            let n = TERRAIN_VERTICES;
+            let step = 2.0 * HALF_SIDE_M / (n - 1) as f64;
+            for j in 0..n {
+                let y = -HALF_SIDE_M + j as f64 * step;
+                for i in 0..n {
+                    let x = -HALF_SIDE_M + i as f64 * step;
+                    line.clear();
+                    line.push_str("v ");
+                    push_coord(&mut line, x);
+                    line.push(' ');
+                    push_coord(&mut line, y);
+                    line.push(' ');
+                    push_coord(&mut line, terrain_height(x, y));
+                    line.push('\n');
+                    w.write_all(line.as_bytes())?;
+                }
+            }
+            // Two counter-clockwise triangles per cell (normals up).
+            for j in 0..n - 1 {
+                for i in 0..n - 1 {
+                    let a = j * n + i + 1;
+                    let b = a + 1;
+                    let c = a + n;
+                    let d = c + 1;
+                    writeln!(w, "f {a} {b} {d}\nf {a} {d} {c}")?;
+                }
+            }
+        }
+    }
+    w.flush()
+}
+
+/// Base height of the benchmark boxes: level ground in the flat scene,
+/// below the lowest terrain under the box in the terrain scene (so that the
+/// walls reach into the ground).
+fn box_base(scene: BenchScene, b: &[f64; 5]) -> (f64, f64) {
+    match scene {
+        BenchScene::Flat => (0.0, b[4]),
+        BenchScene::Terrain => {
+            // The terrain varies by at most ±13.9 m around 10 m.
+            let top = terrain_height(b[0], b[1]) + b[4];
+            (-5.0, top)
+        }
+    }
+}
+
+/// Writes the five boxes as an OBJ file: per box a group `roof_K` (top and
+/// bottom) and a group `wall_K` (sides), 12 triangles each.
+pub fn write_boxes_obj(scene: BenchScene, path: &Path) -> io::Result<()> {
+    let mut w = BufWriter::new(std::fs::File::create(path)?);
+    writeln!(w, "# lidarsim benchmark buildings: {}", scene.name())?;
+    for (k, b) in BOXES.iter().enumerate() {
+        let (z0, z1) = box_base(scene, b);
+        let (hx, hy) = (b[2] / 2.0, b[3] / 2.0);
+        let corners = [
+            (b[0] - hx, b[1] - hy),
+            (b[0] + hx, b[1] - hy),
+            (b[0] + hx, b[1] + hy),
+            (b[0] - hx, b[1] + hy),
+        ];
+        for z in [z0, z1] {
+            for (x, y) in corners {
+                writeln!(w, "v {x} {y} {z}")?;
+            }
+        }
+        // Vertices of this box: bottom 1..4, top 5..8 (relative).
+        let o = k * 8;
+        let v = |i: usize| o + i;
+        writeln!(w, "g roof_{k}")?;
+        writeln!(
+            w,
+            "f {} {} {}\nf {} {} {}",
+            v(5),
+            v(6),
+            v(7),
+            v(5),
+            v(7),
+            v(8)
+        )?;
+        writeln!(
+            w,
+            "f {} {} {}\nf {} {} {}",
+            v(1),
+            v(3),
+            v(2),
+            v(1),
+            v(4),
+            v(3)
+        )?;
+        writeln!(w, "g wall_{k}")?;
+        for s in 0..4 {
+            let (a, b2) = (s + 1, (s + 1) % 4 + 1);
+            writeln!(
+                w,
+                "f {} {} {}\nf {} {} {}",
+                v(a),
+                v(b2),
+                v(b2 + 4),
+                v(a),
+                v(b2 + 4),
+                v(a + 4)
+            )?;
+        }
+    }
+    w.flush()
+}
+
+/// The benchmark survey, with its meshes at `ground` and `boxes` (paths
+/// written as given).
+pub fn survey_toml(ground: &str, boxes: &str) -> String {
+    format!(
+        r#"# lidarsim benchmark survey (the reference simulator's settings):
+# oscillating mirror 100 kHz, 50 Hz, ±20°, 0.5 mrad, 19 sub-rays, 4 ns
+# pulse, full-waveform echo detection, one 300 m line at 500 m, 60 m/s.
+seed = 1
+
+[scanner]
+prf_hz = 100000
+scan_frequency_hz = 50
+scan_angle_deg = 20
+mirror = "triangle"
+divergence_mrad = 0.5
+subrays = 19
+pulse_fwhm_ns = 4.0
+
+[output]
+formats = ["las"]
+
+[[flight_line]]
+start_m = [-150.0, 0.0, 500.0]
+end_m = [150.0, 0.0, 500.0]
+speed_mps = 60.0
+
+[materials.ground]
+reflectance = 0.2
+
+[materials.building]
+reflectance = 0.5
+
+[[mesh]]
+file = "{ground}"
+material = "ground"
+class = "ground"
+
+[[mesh]]
+file = "{boxes}"
+material = "building"
+class = "roof"
+"#
+    )
+}
+
+/// Writes a scene's OBJ files and survey into `dir` as `NAME-ground.obj`,
+/// `NAME-buildings.obj` and `NAME.toml`; returns the survey's path.
+pub fn export(scene: BenchScene, dir: &Path) -> io::Result<std::path::PathBuf> {
+    std::fs::create_dir_all(dir)?;
+    let name = scene.name();
+    let ground = format!("{name}-ground.obj");
+    let boxes = format!("{name}-buildings.obj");
+    write_ground_obj(scene, &dir.join(&ground))?;
+    write_boxes_obj(scene, &dir.join(&boxes))?;
+    let survey = dir.join(format!("{name}.toml"));
+    std::fs::write(&survey, survey_toml(&ground, &boxes))?;
+    Ok(survey)
+}
+
+/// Peak resident memory of this process so far, bytes (Linux; `None`
+/// elsewhere).
+pub fn peak_rss_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// Resets the peak resident memory counter to the current use (Linux ≥ 4.0;
+/// silently does nothing elsewhere).
+pub fn reset_peak_rss() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// The figures of one benchmark scene.
+#[derive(Clone, Debug)]
+pub struct SceneFigures {
+    /// The scene.
+    pub scene: BenchScene,
+    /// Triangles in the scene.
+    pub primitives: usize,
+    /// Seconds to read the survey and its OBJ files.
+    pub parse_s: f64,
+    /// Seconds to build the acceleration structure.
+    pub build_s: f64,
+    /// One entry per thread count.
+    pub runs: Vec<RunFigures>,
+    /// Peak resident memory over load and runs, bytes.
+    pub peak_rss_bytes: Option<u64>,
+}
+
+/// The figures of one run.
+#[derive(Clone, Debug)]
+pub struct RunFigures {
+    /// Worker threads.
+    pub threads: usize,
+    /// Pulses simulated.
+    pub pulses: u64,
+    /// Rays cast (pulses × sub-rays).
+    pub rays: u64,
+    /// Points written.
+    pub points: u64,
+    /// Wall-clock seconds of the run (simulation and LAS output).
+    pub seconds: f64,
+    /// FNV-1a hash of the LAS file written, to show that thread counts
+    /// give identical output.
+    pub las_hash: u64,
+}
+
+impl RunFigures {
+    /// Pulses per second.
+    pub fn pulses_per_s(&self) -> f64 {
+        self.pulses as f64 / self.seconds
+    }
+}
+
+/// 64-bit FNV-1a of a file's bytes.
+fn fnv1a(path: &Path) -> io::Result<u64> {
+    let bytes = std::fs::read(path)?;
+    Ok(bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    }))
+}
+
+/// Loads `survey_path` (timed), then runs it once per entry of `threads`,
+/// writing `points.las` into `work_dir`.
+pub fn measure(
+    scene: BenchScene,
+    survey_path: &Path,
+    work_dir: &Path,
+    threads: &[usize],
+) -> Result<SceneFigures, String> {
+    reset_peak_rss();
+    let t0 = Instant::now();
+    let survey = Survey::load(survey_path).map_err(|e| e.to_string())?;
+    let parse_s = t0.elapsed().as_secs_f64();
+    let t1 = Instant::now();
+    let primitives = survey.scene.primitives.len();
+    let bvh = Bvh::build(survey.scene.clone());
+    let build_s = t1.elapsed().as_secs_f64();
+    let sim = Simulator::new(&survey, &bvh);
+    let subrays = survey.scanner.subrays as u64;
+    let mut runs = Vec::new();
+    for &n in threads {
+        let path = work_dir.join(format!("{}-{n}.las", scene.name()));
+        let settings = las_settings(&survey, &bvh as &dyn RayCaster);
+        let t = Instant::now();
+        let mut las = LasWriter::create(&path, settings).map_err(|e| e.to_string())?;
+        let counts = sim
+            .run(n, &mut [&mut las as &mut dyn PointSink], &|_| {})
+            .map_err(|e| e.to_string())?;
+        Box::new(las).finish().map_err(|e| e.to_string())?;
+        let seconds = t.elapsed().as_secs_f64();
+        let las_hash = fnv1a(&path).map_err(|e| e.to_string())?;
+        let _ = std::fs::remove_file(&path);
+        runs.push(RunFigures {
+            threads: n,
+            pulses: counts.pulses,
+            rays: counts.pulses * subrays,
+            points: counts.points,
+            seconds,
+            las_hash,
+        });
+    }
+    Ok(SceneFigures {
+        scene,
+        primitives,
+        parse_s,
+        build_s,
+        runs,
+        peak_rss_bytes: peak_rss_bytes(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn terrain_grid_has_the_reference_triangle_count() {
+        let n = TERRAIN_VERTICES;
+        assert_eq!(2 * (n - 1) * (n - 1), 999_698);
+    }
+
+    #[test]
+    fn exported_flat_scene_loads_with_62_triangles_and_classes() {
+        let dir = std::env::temp_dir().join(format!("lidarsim-bench-{}", std::process::id()));
+        let survey = export(BenchScene::Flat, &dir).unwrap();
+        let s = Survey::load(&survey).unwrap();
+        assert_eq!(s.scene.primitives.len(), 62);
+        use crate::scene::SurfaceClass;
+        let count = |c| s.scene.primitives.iter().filter(|p| p.class == c).count();
+        assert_eq!(count(SurfaceClass::Ground), 2);
+        assert_eq!(count(SurfaceClass::Roof), 5 * 4);
+        assert_eq!(count(SurfaceClass::Wall), 5 * 8);
+        // 300 m at 60 m/s and 100 kHz.
+        assert_eq!(s.pulses_of(&s.lines[0]), 500_000);
+        // Box roofs at their heights.
+        let b = s.scene.bounds();
+        assert!((b.max.z - 40.0).abs() < 1e-9);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
