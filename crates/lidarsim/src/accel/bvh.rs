@@ -7,7 +7,7 @@
 //! `f64` primitives: a box test may let through a primitive that the exact
 //! `f64` test then rejects, never the reverse.
 
-use super::{Hit, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
+use super::{Hit, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
 use crate::geometry::{Aabb, DVec3, Ray};
 use crate::scene::{Primitive, Scene};
 
@@ -427,6 +427,209 @@ impl RayCaster for Bvh {
     fn trace(&self, ray: &Ray, t_min: f64, t_max: f64, spans: &mut Vec<VolumeSpan>) -> Option<Hit> {
         self.traverse(ray, t_min, t_max, &|_| true, Some(spans))
     }
+
+    /// The sub-rays of a pulse share their origin and lie within a narrow
+    /// cone: the hierarchy is traversed once for the whole bundle (a node is
+    /// visited when any direction within the bundle's per-axis direction
+    /// bounds can meet its box), and every sub-ray is tested exactly, in
+    /// `f64`, against the primitives of the leaves reached. The answers are
+    /// those of [`RayCaster::trace`] for each sub-ray.
+    fn trace_pulse(
+        &self,
+        origin: DVec3,
+        dirs: &[DVec3],
+        t_min: f64,
+        t_max: f64,
+        spans: &mut Vec<VolumeSpan>,
+        out: &mut PulseTrace,
+    ) {
+        out.clear();
+        if self.nodes.is_empty() || dirs.len() < 2 {
+            for dir in dirs {
+                let hit = self.trace(&Ray { origin, dir: *dir }, t_min, t_max, spans);
+                out.push(hit, spans);
+            }
+            return;
+        }
+        let bundle = Bundle::new(origin - self.origin, dirs);
+        let mut best = std::mem::take(&mut out.best);
+        let mut volumes = std::mem::take(&mut out.volumes);
+        best.clear();
+        best.resize(dirs.len(), (t_max, u32::MAX));
+        volumes.clear();
+        let mut missing = dirs.len();
+        let mut far = t_max;
+        let slack = |t: f64| (t + self.pad) as f32 * (1.0 + 1e-6);
+        let mut stack = [0u32; STACK];
+        let mut sp = 0usize;
+        let mut node = 0usize;
+        if bundle.enters(&self.nodes[0], slack(far)).is_none() {
+            sp = usize::MAX;
+        }
+        while sp != usize::MAX {
+            let n = &self.nodes[node];
+            if n.count > 0 {
+                let first = n.left_or_first as usize;
+                for &p in &self.order[first..first + n.count as usize] {
+                    let prim = &self.scene.primitives[p as usize];
+                    if prim.is_volume() {
+                        volumes.push(p);
+                        continue;
+                    }
+                    for (dir, b) in dirs.iter().zip(best.iter_mut()) {
+                        let ray = Ray { origin, dir: *dir };
+                        if let Some(t) = prim.intersect(&ray, t_min, b.0) {
+                            if b.1 == u32::MAX {
+                                missing -= 1;
+                            }
+                            *b = (t, p);
+                        }
+                    }
+                }
+                if missing == 0 {
+                    far = best.iter().fold(0.0f64, |m, b| m.max(b.0));
+                }
+            } else {
+                let l = n.left_or_first as usize;
+                let tl = bundle.enters(&self.nodes[l], slack(far));
+                let tr = bundle.enters(&self.nodes[l + 1], slack(far));
+                match (tl, tr) {
+                    (Some(a), Some(b)) => {
+                        let (near, farther) = if a <= b { (l, l + 1) } else { (l + 1, l) };
+                        if sp < STACK {
+                            stack[sp] = farther as u32;
+                            sp += 1;
+                        }
+                        node = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        node = l;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        node = l + 1;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            loop {
+                if sp == 0 {
+                    sp = usize::MAX;
+                    break;
+                }
+                sp -= 1;
+                let cand = stack[sp] as usize;
+                if bundle.enters(&self.nodes[cand], slack(far)).is_some() {
+                    node = cand;
+                    break;
+                }
+            }
+        }
+        for (dir, &(t, p)) in dirs.iter().zip(best.iter()) {
+            let ray = Ray { origin, dir: *dir };
+            spans.clear();
+            for &v in &volumes {
+                if let Some(s) = volume_span(&self.scene.primitives[v as usize], v, &ray, t_min, t)
+                {
+                    spans.push(s);
+                }
+            }
+            finish_spans(spans, t);
+            let hit = (p != u32::MAX).then(|| make_hit(&self.scene, p, &ray, t));
+            out.push(hit, spans);
+        }
+        out.best = best;
+        out.volumes = volumes;
+    }
+}
+
+/// The sub-rays of a pulse as one bundle: a common origin (relative to the
+/// hierarchy's origin) and, per axis, bounds on the direction components.
+struct Bundle {
+    o: [f32; 3],
+    /// Per axis: how the bundle's direction components lie around zero.
+    sign: [Sign; 3],
+    /// Per axis: reciprocals of the lower and upper direction bounds.
+    inv_lo: [f32; 3],
+    inv_hi: [f32; 3],
+}
+
+#[derive(Clone, Copy)]
+enum Sign {
+    Positive,
+    Negative,
+    Straddles,
+}
+
+impl Bundle {
+    fn new(o: DVec3, dirs: &[DVec3]) -> Self {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for d in dirs {
+            for a in 0..3 {
+                lo[a] = lo[a].min(d[a]);
+                hi[a] = hi[a].max(d[a]);
+            }
+        }
+        let mut sign = [Sign::Straddles; 3];
+        let mut inv_lo = [0.0f32; 3];
+        let mut inv_hi = [0.0f32; 3];
+        for a in 0..3 {
+            // Widen the bounds a little so that f32 rounding stays on the
+            // conservative side.
+            let (l, h) = (lo[a] - 1e-6, hi[a] + 1e-6);
+            let (l, h) = if l > 0.0 {
+                sign[a] = Sign::Positive;
+                (l, h)
+            } else if h < 0.0 {
+                sign[a] = Sign::Negative;
+                (l, h)
+            } else {
+                (l.min(-1e-12), h.max(1e-12))
+            };
+            inv_lo[a] = (1.0 / l) as f32;
+            inv_hi[a] = (1.0 / h) as f32;
+        }
+        Self {
+            o: [o.x as f32, o.y as f32, o.z as f32],
+            sign,
+            inv_lo,
+            inv_hi,
+        }
+    }
+
+    /// A lower bound of the distance at which some ray of the bundle enters
+    /// the node's box, if any can before `t_max`.
+    ///
+    /// On each axis a ray `o + t·d` (t ≥ 0) with `lo ≤ d ≤ hi` is inside the
+    /// slab `[min, max]` only if `t·hi ≥ min − o` and `t·lo ≤ max − o`; each
+    /// condition bounds `t` from below or above depending on the sign of
+    /// `hi` and `lo`.
+    #[inline]
+    fn enters(&self, n: &Node, t_max: f32) -> Option<f32> {
+        let mut t0 = 0.0f32;
+        let mut t1 = t_max;
+        for a in 0..3 {
+            let below = n.min[a] - self.o[a];
+            let above = n.max[a] - self.o[a];
+            match self.sign[a] {
+                Sign::Positive => {
+                    t0 = t0.max(below * self.inv_hi[a]);
+                    t1 = t1.min(above * self.inv_lo[a]);
+                }
+                Sign::Negative => {
+                    t0 = t0.max(above * self.inv_lo[a]);
+                    t1 = t1.min(below * self.inv_hi[a]);
+                }
+                Sign::Straddles => {
+                    t0 = t0.max(below * self.inv_hi[a]).max(above * self.inv_lo[a]);
+                }
+            }
+        }
+        (t0 <= t1).then_some(t0)
+    }
 }
 
 #[inline]
@@ -505,8 +708,62 @@ mod tests {
         assert!(bvh.stats().max_depth < STACK);
     }
 
+    /// A triangle soup with trees standing in it.
+    fn scene_with_trees(seed: u64) -> Scene {
+        let mut scene = random_scene(seed, 300);
+        let mut s = crate::rng::Stream::new(seed, 1, 0, crate::rng::Purpose::Test);
+        for k in 0..40 {
+            let base = DVec3::new(s.uniform() * 160.0 - 80.0, s.uniform() * 160.0 - 80.0, 0.0);
+            let spec = crate::scene::TreeSpec::new(
+                base,
+                crate::scene::Species::Pine,
+                0.3,
+                15.0 + 10.0 * s.uniform(),
+                6.0,
+            );
+            scene.add_tree(&spec, 0.3, format!("tree {k}"));
+        }
+        scene
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(64))]
+        /// The bundle traversal gives every sub-ray the hit and crown spans
+        /// that tracing it alone over all primitives gives.
+        #[test]
+        fn pulse_bundles_match_single_rays(seed in 0u64..1000, ox in -120.0..120.0f64,
+                                           oy in -120.0..120.0f64, dx in -0.5..0.5f64,
+                                           dy in -0.5..0.5f64, spread in 1e-5..0.2f64) {
+            let scene = scene_with_trees(seed);
+            let brute = BruteForce::new(scene.clone());
+            let bvh = Bvh::build(scene);
+            let origin = DVec3::new(ox, oy, 300.0);
+            let c = DVec3::new(dx, dy, -1.0).normalize();
+            let u = c.any_orthonormal_vector();
+            let v = c.cross(u);
+            // A spiral of 19 directions around the central one.
+            let dirs: Vec<DVec3> = (0..19)
+                .map(|i| {
+                    let r = spread * (i as f64 / 18.0).sqrt();
+                    let a = i as f64 * 2.399_963;
+                    (c + u * (r * a.cos()) + v * (r * a.sin())).normalize()
+                })
+                .collect();
+            let mut spans = Vec::new();
+            let mut trace = crate::accel::PulseTrace::default();
+            bvh.trace_pulse(origin, &dirs, 0.5, 1e4, &mut spans, &mut trace);
+            for (i, d) in dirs.iter().enumerate() {
+                let ray = Ray { origin, dir: *d };
+                let want = brute.trace(&ray, 0.5, 1e4, &mut spans);
+                let got = trace.hits[i];
+                prop_assert_eq!(want.map(|h| h.prim), got.map(|h| h.prim));
+                if let (Some(a), Some(b)) = (want, got) {
+                    prop_assert!((a.t - b.t).abs() < 1e-9);
+                }
+                prop_assert_eq!(&spans[..], trace.spans_of(i));
+            }
+        }
+
         #[test]
         fn same_answers_as_brute_force(seed in 0u64..1000, ox in -150.0..150.0f64,
                                        oy in -150.0..150.0f64, dx in -0.5..0.5f64,
