@@ -117,6 +117,10 @@ enum Command {
         /// Working directory for the generated files (default: a temporary one).
         #[arg(long, value_name = "DIR")]
         work_dir: Option<PathBuf>,
+        /// Pulses of the flight line (default: the benchmark's 500 000;
+        /// fewer for profiling).
+        #[arg(long, default_value_t = lidarsim::bench::PULSES)]
+        pulses: u64,
     },
 }
 
@@ -192,7 +196,8 @@ fn main() -> ExitCode {
             scene,
             threads,
             work_dir,
-        } => match bench(export, &scene, &threads, work_dir) {
+            pulses,
+        } => match bench(export, &scene, &threads, work_dir, pulses) {
             Ok(()) => ExitCode::SUCCESS,
             Err(msg) => fail(1, &msg),
         },
@@ -214,6 +219,7 @@ fn bench(
     scenes: &[String],
     threads: &[usize],
     work_dir: Option<PathBuf>,
+    pulses: u64,
 ) -> Result<(), String> {
     use lidarsim::bench::{BenchScene, export as export_scene, measure};
     let scenes: Vec<BenchScene> = if scenes.is_empty() {
@@ -229,7 +235,8 @@ fn bench(
     };
     if let Some(dir) = export {
         for s in &scenes {
-            let path = export_scene(*s, &dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            let path =
+                export_scene(*s, &dir, pulses).map_err(|e| format!("{}: {e}", dir.display()))?;
             println!("exported {}", path.display());
         }
         return Ok(());
@@ -243,7 +250,8 @@ fn bench(
     };
     let result = (|| {
         for s in &scenes {
-            let survey = export_scene(*s, &dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            let survey =
+                export_scene(*s, &dir, pulses).map_err(|e| format!("{}: {e}", dir.display()))?;
             let f = measure(*s, &survey, &dir, threads)?;
             let name = s.name();
             println!("{name} primitives {}", f.primitives);

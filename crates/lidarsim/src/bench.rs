@@ -206,9 +206,14 @@ pub fn write_boxes_obj(scene: BenchScene, path: &Path) -> io::Result<()> {
     w.flush()
 }
 
+/// Pulses of the benchmark's flight line (300 m at 60 m/s and 100 kHz).
+pub const PULSES: u64 = 500_000;
+
 /// The benchmark survey, with its meshes at `ground` and `boxes` (paths
-/// written as given).
-pub fn survey_toml(ground: &str, boxes: &str) -> String {
+/// written as given) and a flight line of `pulses` pulses (the benchmark's
+/// [`PULSES`], or fewer for profiling), starting at x = −150 m.
+pub fn survey_toml(ground: &str, boxes: &str, pulses: u64) -> String {
+    let end_x = -150.0 + pulses as f64 / 100_000.0 * 60.0;
     format!(
         r#"# lidarsim benchmark survey (the reference simulator's settings):
 # oscillating mirror 100 kHz, 50 Hz, ±20°, 0.5 mrad, 19 sub-rays, 4 ns
@@ -229,7 +234,7 @@ formats = ["las"]
 
 [[flight_line]]
 start_m = [-150.0, 0.0, 500.0]
-end_m = [150.0, 0.0, 500.0]
+end_m = [{end_x}, 0.0, 500.0]
 speed_mps = 60.0
 
 [materials.ground]
@@ -251,9 +256,10 @@ class = "roof"
     )
 }
 
-/// Writes a scene's OBJ files and survey into `dir` as `NAME-ground.obj`,
-/// `NAME-buildings.obj` and `NAME.toml`; returns the survey's path.
-pub fn export(scene: BenchScene, dir: &Path) -> io::Result<std::path::PathBuf> {
+/// Writes a scene's OBJ files and survey (a line of `pulses` pulses) into
+/// `dir` as `NAME-ground.obj`, `NAME-buildings.obj` and `NAME.toml`;
+/// returns the survey's path.
+pub fn export(scene: BenchScene, dir: &Path, pulses: u64) -> io::Result<std::path::PathBuf> {
     std::fs::create_dir_all(dir)?;
     let name = scene.name();
     let ground = format!("{name}-ground.obj");
@@ -261,7 +267,7 @@ pub fn export(scene: BenchScene, dir: &Path) -> io::Result<std::path::PathBuf> {
     write_ground_obj(scene, &dir.join(&ground))?;
     write_boxes_obj(scene, &dir.join(&boxes))?;
     let survey = dir.join(format!("{name}.toml"));
-    std::fs::write(&survey, survey_toml(&ground, &boxes))?;
+    std::fs::write(&survey, survey_toml(&ground, &boxes, pulses))?;
     Ok(survey)
 }
 
@@ -393,7 +399,7 @@ mod tests {
     #[test]
     fn exported_flat_scene_loads_with_62_triangles_and_classes() {
         let dir = std::env::temp_dir().join(format!("lidarsim-bench-{}", std::process::id()));
-        let survey = export(BenchScene::Flat, &dir).unwrap();
+        let survey = export(BenchScene::Flat, &dir, PULSES).unwrap();
         let s = Survey::load(&survey).unwrap();
         assert_eq!(s.scene.primitives.len(), 62);
         use crate::scene::SurfaceClass;

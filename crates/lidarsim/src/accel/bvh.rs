@@ -533,6 +533,11 @@ impl RayCaster for Bvh {
         }
         for (dir, &(t, p)) in dirs.iter().zip(best.iter()) {
             let ray = Ray { origin, dir: *dir };
+            if volumes.is_empty() {
+                let hit = (p != u32::MAX).then(|| make_hit(&self.scene, p, &ray, t));
+                out.push(hit, &[]);
+                continue;
+            }
             spans.clear();
             for &v in &volumes {
                 if let Some(s) = volume_span(&self.scene.primitives[v as usize], v, &ray, t_min, t)

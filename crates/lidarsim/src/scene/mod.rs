@@ -221,8 +221,11 @@ impl TriangleFan {
     pub fn intersect(&self, d: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
         let (w0, w1, w2) = (d.dot(self.nab), d.dot(self.nbc), d.dot(self.nca));
         let inside = (w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0) | (w0 <= 0.0 && w1 <= 0.0 && w2 <= 0.0);
+        if !inside {
+            return None;
+        }
         let t = self.num / self.n.dot(d);
-        (inside & (t > t_min) & (t < t_max)).then_some(t)
+        (t > t_min && t < t_max).then_some(t)
     }
 }
 
