@@ -14,6 +14,19 @@ use crate::scene::{Primitive, Scene, Shape, Triangle, TriangleFan};
 const MAX_LEAF: usize = 4;
 const BINS: usize = 16;
 const STACK: usize = 96;
+/// Levels of the hierarchy whose two halves are built in parallel.
+const PARALLEL_DEPTH: usize = 4;
+/// Smallest subtree worth a parallel split.
+const PARALLEL_MIN: usize = 20_000;
+
+/// Adds `by` to the child index of every interior node.
+fn shift(nodes: &mut [Node], by: u32) {
+    for n in nodes {
+        if n.count == 0 {
+            n.left_or_first += by;
+        }
+    }
+}
 
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
@@ -52,7 +65,13 @@ pub struct Bvh {
 
 struct BuildPrim {
     bounds: Aabb,
-    centroid: DVec3,
+}
+
+impl BuildPrim {
+    #[inline]
+    fn centroid(&self) -> DVec3 {
+        self.bounds.center()
+    }
 }
 
 impl Bvh {
@@ -77,14 +96,10 @@ impl Bvh {
             .iter()
             .map(|p| {
                 let b = p.bounds();
-                BuildPrim {
-                    bounds: b,
-                    centroid: b.center(),
-                }
+                BuildPrim { bounds: b }
             })
             .collect();
         let mut order: Vec<u32> = (0..prims.len() as u32).collect();
-        let mut nodes = Vec::with_capacity(2 * prims.len().max(1));
         let mut bvh = Self {
             scene: Scene::default(),
             nodes: Vec::new(),
@@ -92,22 +107,14 @@ impl Bvh {
             origin,
             pad,
         };
+        let mut nodes = Vec::new();
         if !prims.is_empty() {
-            nodes.push(bvh.leaf_node(&prims, &order, 0, prims.len()));
-            let mut work = vec![0usize];
-            while let Some(ni) = work.pop() {
-                let first = nodes[ni].left_or_first as usize;
-                let count = nodes[ni].count as usize;
-                if let Some(mid) = split(&prims, &mut order[first..first + count]) {
-                    let left = nodes.len();
-                    nodes.push(bvh.leaf_node(&prims, &order, first, mid));
-                    nodes.push(bvh.leaf_node(&prims, &order, first + mid, count - mid));
-                    nodes[ni].left_or_first = left as u32;
-                    nodes[ni].count = 0;
-                    work.push(left);
-                    work.push(left + 1);
-                }
-            }
+            let (root, desc) = bvh.subtree(&prims, &mut order, 0, 0);
+            nodes.reserve_exact(1 + desc.len());
+            nodes.push(root);
+            nodes.extend(desc);
+            // The root's descendants start at index 1.
+            shift(&mut nodes, 1);
         }
         bvh.scene = scene;
         bvh.nodes = nodes;
@@ -115,17 +122,107 @@ impl Bvh {
         bvh
     }
 
-    fn leaf_node(&self, prims: &[BuildPrim], order: &[u32], first: usize, count: usize) -> Node {
-        let b = order[first..first + count]
+    /// The box node over `order[at..at + count]`, a leaf whose first
+    /// primitive is at `first + at` in the whole order.
+    fn leaf_node(
+        &self,
+        prims: &[BuildPrim],
+        order: &[u32],
+        at: usize,
+        count: usize,
+        first: usize,
+    ) -> Node {
+        let b = order[at..at + count]
             .iter()
             .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds));
         let lo = b.min - self.origin - DVec3::splat(self.pad);
         let hi = b.max - self.origin + DVec3::splat(self.pad);
         Node {
             min: [down(lo.x), down(lo.y), down(lo.z)],
-            left_or_first: first as u32,
+            left_or_first: (first + at) as u32,
             max: [up(hi.x), up(hi.y), up(hi.z)],
             count: count as u32,
+        }
+    }
+
+    /// Builds the subtree over `order` (whose first element is at `first`
+    /// in the whole order). Returns its root and its other nodes; child
+    /// indices of interior nodes count from the start of that list (the
+    /// caller shifts them). The two halves of the top levels are built in
+    /// parallel; the tree is the same as a sequential build's.
+    fn subtree(
+        &self,
+        prims: &[BuildPrim],
+        order: &mut [u32],
+        first: usize,
+        depth: usize,
+    ) -> (Node, Vec<Node>) {
+        let count = order.len();
+        let mut root = self.leaf_node(prims, order, 0, count, first);
+        if depth >= PARALLEL_DEPTH || count < PARALLEL_MIN {
+            let mut desc = Vec::with_capacity(2 * count / MAX_LEAF + 2);
+            self.sequential(prims, order, first, &mut root, &mut desc);
+            return (root, desc);
+        }
+        let Some(mid) = split(prims, order) else {
+            return (root, Vec::new());
+        };
+        let (lo, hi) = order.split_at_mut(mid);
+        let ((mut lroot, mut ldesc), (mut rroot, mut rdesc)) = rayon::join(
+            || self.subtree(prims, lo, first, depth + 1),
+            || self.subtree(prims, hi, first + mid, depth + 1),
+        );
+        // Layout: the two children, then the left's descendants, then the
+        // right's.
+        let left_base = 2;
+        let right_base = 2 + ldesc.len() as u32;
+        shift(std::slice::from_mut(&mut lroot), left_base);
+        shift(&mut ldesc, left_base);
+        shift(std::slice::from_mut(&mut rroot), right_base);
+        shift(&mut rdesc, right_base);
+        let mut nodes = Vec::with_capacity(2 + ldesc.len() + rdesc.len());
+        nodes.push(lroot);
+        nodes.push(rroot);
+        nodes.append(&mut ldesc);
+        nodes.append(&mut rdesc);
+        root.left_or_first = 0;
+        root.count = 0;
+        (root, nodes)
+    }
+
+    /// Sequential binned-SAH build below `root` (a leaf over all of
+    /// `order`, which may become interior); descendants go to `desc` with
+    /// child indices counted from its start.
+    fn sequential(
+        &self,
+        prims: &[BuildPrim],
+        order: &mut [u32],
+        first: usize,
+        root: &mut Node,
+        desc: &mut Vec<Node>,
+    ) {
+        // Work items: (node, None) for the root, (index in desc) otherwise.
+        let mut work: Vec<Option<usize>> = vec![None];
+        while let Some(item) = work.pop() {
+            let node = match item {
+                None => *root,
+                Some(i) => desc[i],
+            };
+            let at = node.left_or_first as usize - first;
+            let count = node.count as usize;
+            if let Some(mid) = split(prims, &mut order[at..at + count]) {
+                let left = desc.len();
+                desc.push(self.leaf_node(prims, order, at, mid, first));
+                desc.push(self.leaf_node(prims, order, at + mid, count - mid, first));
+                let parent = match item {
+                    None => &mut *root,
+                    Some(i) => &mut desc[i],
+                };
+                parent.left_or_first = left as u32;
+                parent.count = 0;
+                work.push(Some(left));
+                work.push(Some(left + 1));
+            }
         }
     }
 
@@ -240,7 +337,7 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<usize> {
         return None;
     }
     let cb = items.iter().fold(Aabb::EMPTY, |b, &i| {
-        b.union_point(prims[i as usize].centroid)
+        b.union_point(prims[i as usize].centroid())
     });
     let node_area = items
         .iter()
@@ -254,7 +351,7 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<usize> {
         }
         let scale = BINS as f64 / ext[axis];
         let bin_of = |i: u32| {
-            (((prims[i as usize].centroid[axis] - cb.min[axis]) * scale) as usize).min(BINS - 1)
+            (((prims[i as usize].centroid()[axis] - cb.min[axis]) * scale) as usize).min(BINS - 1)
         };
         let mut boxes = [Aabb::EMPTY; BINS];
         let mut counts = [0usize; BINS];
@@ -296,7 +393,7 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<usize> {
             }
             let scale = BINS as f64 / ext[axis];
             let goes_left = |i: &u32| {
-                let c = prims[*i as usize].centroid[axis];
+                let c = prims[*i as usize].centroid()[axis];
                 ((((c - cb.min[axis]) * scale) as usize).min(BINS - 1)) <= bin
             };
             let mid = partition(items, goes_left);

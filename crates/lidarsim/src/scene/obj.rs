@@ -161,9 +161,9 @@ pub fn load_obj(
     // The survey's materials are offered to the OBJ parser as one more
     // material library, named by a line put in front of the file, so that
     // `usemtl NAME` of a survey-only material starts its own group of faces.
-    let mut source = format!("mtllib {SURVEY_LIBRARY}\n").into_bytes();
-    source.extend_from_slice(&text);
-    let (models, materials) = tobj::load_obj_buf(&mut BufReader::new(&source[..]), &options, |p| {
+    let prefix = format!("mtllib {SURVEY_LIBRARY}\n").into_bytes();
+    let mut source = BufReader::new(std::io::Read::chain(&prefix[..], &text[..]));
+    let (models, materials) = tobj::load_obj_buf(&mut source, &options, |p| {
         if p == Path::new(SURVEY_LIBRARY) {
             let mut names: Vec<&String> = survey_materials.keys().collect();
             names.sort();
