@@ -252,8 +252,21 @@ fn prominence(s: &[f64], p: usize) -> f64 {
     h - left_min.max(right_min)
 }
 
+/// Index of the smallest sample in `a..=b` (the first of equals, in the
+/// total order of `f64`).
 fn argmin(s: &[f64], a: usize, b: usize) -> usize {
-    (a..=b).min_by(|&i, &j| s[i].total_cmp(&s[j])).unwrap_or(a)
+    let Some(window) = s.get(a..=b) else {
+        return a;
+    };
+    let mut best = 0;
+    let mut min = window[0];
+    for (i, &v) in window.iter().enumerate().skip(1) {
+        if v.total_cmp(&min).is_lt() {
+            best = i;
+            min = v;
+        }
+    }
+    a + best
 }
 
 /// Sub-bin offset of the maximum and the fitted peak value: a Gaussian
@@ -268,7 +281,8 @@ fn refine(s: &[f64], p: usize, half: usize, lo: usize, hi: usize) -> (f64, f64) 
     let b = hi.min(p + half).min(s.len() - 1);
     // Normal equations of the weighted fit ln s = c0 + c1 x + c2 x², with
     // x relative to p for conditioning.
-    let mut m = [[0.0f64; 3]; 3];
+    // The matrix is symmetric: Σw·x^(r+c) for r, c in 0..3, five sums.
+    let mut mom = [0.0f64; 5];
     let mut v = [0.0f64; 3];
     let mut used = 0;
     for (j, &y) in s.iter().enumerate().take(b + 1).skip(a) {
@@ -277,16 +291,23 @@ fn refine(s: &[f64], p: usize, half: usize, lo: usize, hi: usize) -> (f64, f64) 
         }
         let x = j as f64 - p as f64;
         let w = y * y;
-        let ly = y.ln();
-        let pw = [1.0, x, x * x];
-        for r in 0..3 {
-            for c in 0..3 {
-                m[r][c] += w * pw[r] * pw[c];
-            }
-            v[r] += w * pw[r] * ly;
-        }
+        let wly = w * y.ln();
+        let x2 = x * x;
+        mom[0] += w;
+        mom[1] += w * x;
+        mom[2] += w * x2;
+        mom[3] += w * x2 * x;
+        mom[4] += w * x2 * x2;
+        v[0] += wly;
+        v[1] += wly * x;
+        v[2] += wly * x2;
         used += 1;
     }
+    let m = [
+        [mom[0], mom[1], mom[2]],
+        [mom[1], mom[2], mom[3]],
+        [mom[2], mom[3], mom[4]],
+    ];
     if used >= 3
         && let Some([c0, c1, c2]) = solve3(m, v)
         && c2 < 0.0

@@ -7,7 +7,9 @@
 //! `f64` primitives: a box test may let through a primitive that the exact
 //! `f64` test then rejects, never the reverse.
 
-use super::{Hit, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
+use super::{
+    Hit, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, oriented_hit, volume_span,
+};
 use crate::geometry::{Aabb, DVec3, Ray};
 use crate::scene::{Primitive, Scene, Shape, Triangle, TriangleFan};
 
@@ -628,10 +630,26 @@ impl RayCaster for Bvh {
                 }
             }
         }
+        // Sub-rays mostly hit the same flat primitive: its normal is
+        // computed once.
+        let mut flat: Option<(u32, DVec3)> = None;
         for (dir, &(t, p)) in dirs.iter().zip(best.iter()) {
             let ray = Ray { origin, dir: *dir };
             if volumes.is_empty() {
-                let hit = (p != u32::MAX).then(|| make_hit(&self.scene, p, &ray, t));
+                let hit = (p != u32::MAX).then(|| {
+                    let n = match flat {
+                        Some((q, n)) if q == p => n,
+                        _ => {
+                            let prim = &self.scene.primitives[p as usize];
+                            let n = prim.normal_at(ray.at(t));
+                            if prim.is_flat() {
+                                flat = Some((p, n));
+                            }
+                            n
+                        }
+                    };
+                    oriented_hit(p, &ray, t, n)
+                });
                 out.push(hit, &[]);
                 continue;
             }

@@ -127,7 +127,18 @@ pub trait RayCaster: Send + Sync {
 /// Builds the hit record for primitive `prim` at distance `t`.
 #[inline]
 pub(crate) fn make_hit(scene: &Scene, prim: u32, ray: &Ray, t: f64) -> Hit {
-    let n = scene.primitives[prim as usize].normal_at(ray.at(t));
+    oriented_hit(
+        prim,
+        ray,
+        t,
+        scene.primitives[prim as usize].normal_at(ray.at(t)),
+    )
+}
+
+/// The hit record with the surface normal `n` turned towards the ray
+/// origin.
+#[inline]
+pub(crate) fn oriented_hit(prim: u32, ray: &Ray, t: f64, n: DVec3) -> Hit {
     let normal = if n.dot(ray.dir) > 0.0 { -n } else { n };
     Hit { t, prim, normal }
 }

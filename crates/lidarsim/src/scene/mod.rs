@@ -283,6 +283,12 @@ impl Primitive {
         }
     }
 
+    /// True for planar shapes, whose normal is the same everywhere.
+    #[inline]
+    pub fn is_flat(&self) -> bool {
+        matches!(self.shape, Shape::Polygon(_) | Shape::Triangle(_))
+    }
+
     /// Unit surface normal at the point `p` on the surface (either side).
     #[inline]
     pub fn normal_at(&self, p: DVec3) -> DVec3 {
