@@ -6,7 +6,7 @@
 //! middle → left → right → middle. Pulses leave at integer ticks
 //! `t_k = t_0 + k / PRF` ("Time is described in ticks").
 
-use crate::geometry::DVec3;
+use crate::geometry::{DMat3, DVec3};
 
 /// Mirror motion profile.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -93,6 +93,8 @@ pub struct BeamPattern {
     offsets: Vec<[f64; 2]>,
     /// Energy share of each sub-ray; sums to 1.
     weights: Vec<f64>,
+    /// Unit directions of the undeflected beam.
+    base: Vec<DVec3>,
 }
 
 impl BeamPattern {
@@ -101,10 +103,7 @@ impl BeamPattern {
     pub fn new(n: usize, divergence_rad: f64) -> Self {
         let n = n.max(1);
         if n == 1 {
-            return Self {
-                offsets: vec![[0.0, 0.0]],
-                weights: vec![1.0],
-            };
+            return Self::from_offsets(vec![[0.0, 0.0]]);
         }
         let half = 0.5 * divergence_rad;
         let p_max = 1.0 - (-2.0f64).exp();
@@ -118,9 +117,23 @@ impl BeamPattern {
                 [t * a.cos(), t * a.sin()]
             })
             .collect();
+        Self::from_offsets(offsets)
+    }
+
+    /// The pattern of equal-energy rays at the given offsets (tangents of
+    /// the off-axis angles across and along).
+    fn from_offsets(offsets: Vec<[f64; 2]>) -> Self {
+        let n = offsets.len();
+        // Directions for an undeflected beam (θ = 0: along +z, "across"
+        // along +x, "along" along +y).
+        let base = offsets
+            .iter()
+            .map(|o| DVec3::new(o[0], o[1], 1.0).normalize())
+            .collect();
         Self {
             offsets,
             weights: vec![1.0 / n as f64; n],
+            base,
         }
     }
 
@@ -147,16 +160,25 @@ impl BeamPattern {
     /// Sub-ray directions in the scanner frame around the beam of
     /// deflection `theta_rad`, written into `out` (unit vectors).
     pub fn directions(&self, theta_rad: f64, out: &mut Vec<DVec3>) {
-        let b = Mirror::beam_direction(theta_rad);
-        // Perpendiculars: across the scan plane and along the flight axis.
-        let u = DVec3::new(theta_rad.cos(), 0.0, -theta_rad.sin());
-        let v = DVec3::Y;
+        let m = Self::deflection(theta_rad);
         out.clear();
-        out.extend(
-            self.offsets
-                .iter()
-                .map(|o| (b + u * o[0] + v * o[1]).normalize()),
-        );
+        out.extend(self.base.iter().map(|d| m * *d));
+    }
+
+    /// Rotation of the undeflected pattern to the deflection `theta_rad`
+    /// (about the scanner's y axis): it takes +z to the beam direction
+    /// [`Mirror::beam_direction`] and +x to the across-scan perpendicular
+    /// `(cos θ, 0, −sin θ)`; the along-track axis +y stays.
+    pub fn deflection(theta_rad: f64) -> DMat3 {
+        let (s, c) = theta_rad.sin_cos();
+        DMat3::from_cols(DVec3::new(c, 0.0, -s), DVec3::Y, DVec3::new(s, 0.0, c))
+    }
+
+    /// Sub-ray directions of the undeflected beam (θ = 0), unit vectors:
+    /// [`BeamPattern::directions`] at `θ` is [`BeamPattern::deflection`]
+    /// applied to these.
+    pub fn base_directions(&self) -> &[DVec3] {
+        &self.base
     }
 }
 

@@ -69,7 +69,6 @@ impl RunCounts {
 /// Reusable per-thread buffers of the per-pulse computation.
 #[derive(Default)]
 pub struct Scratch {
-    local_dirs: Vec<DVec3>,
     dirs: Vec<DVec3>,
     trace: PulseTrace,
     spans: Vec<VolumeSpan>,
@@ -183,11 +182,11 @@ impl<'a> Simulator<'a> {
         let central = rot * Mirror::beam_direction(theta);
 
         // Sub-rays in the world frame, cast as one pulse.
-        self.pattern.directions(theta, &mut scratch.local_dirs);
+        let to_world = rot * BeamPattern::deflection(theta);
         scratch.dirs.clear();
         scratch
             .dirs
-            .extend(scratch.local_dirs.iter().map(|d| rot * *d));
+            .extend(self.pattern.base_directions().iter().map(|d| to_world * *d));
         self.caster.trace_pulse(
             origin,
             &scratch.dirs,
