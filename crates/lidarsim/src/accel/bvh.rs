@@ -338,30 +338,38 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<usize> {
     if n <= MAX_LEAF {
         return None;
     }
-    let cb = items.iter().fold(Aabb::EMPTY, |b, &i| {
-        b.union_point(prims[i as usize].centroid())
+    // One pass for the bounds of the centroids and of the node, one for
+    // the bins of all three axes.
+    let (cb, nb) = items.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(c, b), &i| {
+        let p = &prims[i as usize];
+        (c.union_point(p.centroid()), b.union(p.bounds))
     });
-    let node_area = items
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds))
-        .surface_area();
+    let node_area = nb.surface_area();
     let ext = cb.extent();
+    let scale = [0, 1, 2].map(|a| {
+        if ext[a] > 0.0 {
+            BINS as f64 / ext[a]
+        } else {
+            0.0
+        }
+    });
+    let mut boxes = [[Aabb::EMPTY; BINS]; 3];
+    let mut counts = [[0usize; BINS]; 3];
+    for &i in items.iter() {
+        let p = &prims[i as usize];
+        let c = p.centroid();
+        for axis in 0..3 {
+            let b = (((c[axis] - cb.min[axis]) * scale[axis]) as usize).min(BINS - 1);
+            boxes[axis][b] = boxes[axis][b].union(p.bounds);
+            counts[axis][b] += 1;
+        }
+    }
     let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bin)
     for axis in 0..3 {
         if ext[axis] <= 0.0 {
             continue;
         }
-        let scale = BINS as f64 / ext[axis];
-        let bin_of = |i: u32| {
-            (((prims[i as usize].centroid()[axis] - cb.min[axis]) * scale) as usize).min(BINS - 1)
-        };
-        let mut boxes = [Aabb::EMPTY; BINS];
-        let mut counts = [0usize; BINS];
-        for &i in items.iter() {
-            let b = bin_of(i);
-            boxes[b] = boxes[b].union(prims[i as usize].bounds);
-            counts[b] += 1;
-        }
+        let (boxes, counts) = (&boxes[axis], &counts[axis]);
         // Sweep from the right to get the right-hand areas and counts.
         let mut right_area = [0.0; BINS];
         let mut right_count = [0usize; BINS];
@@ -393,7 +401,7 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<usize> {
             if cost >= leaf_cost && n <= 2 * MAX_LEAF {
                 return None;
             }
-            let scale = BINS as f64 / ext[axis];
+            let scale = scale[axis];
             let goes_left = |i: &u32| {
                 let c = prims[*i as usize].centroid()[axis];
                 ((((c - cb.min[axis]) * scale) as usize).min(BINS - 1)) <= bin
