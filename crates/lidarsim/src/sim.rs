@@ -357,6 +357,7 @@ impl<'a> Simulator<'a> {
                             let b = range_to_bin(r.range_m, bin_s);
                             **q == p && b >= lo && b < hi
                         })
+                        .filter(|(_, n)| n.is_finite())
                         .map_or(f64::NAN, |(_, n)| {
                             central.dot(*n).abs().min(1.0).acos().to_degrees()
                         });

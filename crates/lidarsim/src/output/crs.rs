@@ -20,10 +20,7 @@ pub fn wkt_for_epsg(code: u32) -> Option<String> {
         3067 => return Some(tm_wkt("ETRS89 / TM35FIN(E,N)", ETRS89, 27, false, 3067)),
         _ => return None,
     };
-    let title = format!(
-        "{name} / UTM zone {zone}{}",
-        if south { 'S' } else { 'N' }
-    );
+    let title = format!("{name} / UTM zone {zone}{}", if south { 'S' } else { 'N' });
     Some(tm_wkt(&title, geog, 6 * zone as i32 - 183, south, code))
 }
 
@@ -40,9 +37,19 @@ pub fn parse_epsg(text: &str) -> Option<u32> {
 /// balance, no NUL byte. Returns what is wrong.
 pub fn check_wkt(wkt: &str) -> Result<(), String> {
     let t = wkt.trim();
-    let keyword: String = t.chars().take_while(|c| c.is_ascii_alphanumeric() || *c == '_').collect();
+    let keyword: String = t
+        .chars()
+        .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+        .collect();
     const KNOWN: [&str; 8] = [
-        "PROJCS", "PROJCRS", "COMPD_CS", "COMPOUNDCRS", "GEOGCS", "GEOGCRS", "GEOCCS", "VERT_CS",
+        "PROJCS",
+        "PROJCRS",
+        "COMPD_CS",
+        "COMPOUNDCRS",
+        "GEOGCS",
+        "GEOGCRS",
+        "GEOCCS",
+        "VERT_CS",
     ];
     if !KNOWN.contains(&keyword.to_ascii_uppercase().as_str()) {
         return Err(format!(
@@ -105,7 +112,11 @@ mod tests {
         assert!(s.contains(r#"PARAMETER["false_northing",10000000]"#));
         let e = wkt_for_epsg(25832).unwrap();
         assert!(e.contains(r#""ETRS89 / UTM zone 32N""#) && e.contains("GRS 1980"));
-        assert!(wkt_for_epsg(3067).unwrap().contains(r#"central_meridian",27]"#));
+        assert!(
+            wkt_for_epsg(3067)
+                .unwrap()
+                .contains(r#"central_meridian",27]"#)
+        );
         assert!(wkt_for_epsg(4326).is_none());
         for code in [32601, 32660, 32701, 32760, 25828, 25838, 26901, 26923] {
             check_wkt(&wkt_for_epsg(code).unwrap()).unwrap();

@@ -521,7 +521,12 @@ impl LasWriter {
                 write_wave_packet(&mut self.buf, p, link, wdp.bin_ps);
             }
             if self.settings.attribute_extra_bytes {
-                for v in [p.amplitude, p.echo_width_ns, p.range_m, p.incidence_angle_deg] {
+                for v in [
+                    p.amplitude,
+                    p.echo_width_ns,
+                    p.range_m,
+                    p.incidence_angle_deg,
+                ] {
                     self.buf.extend_from_slice(&(v as f32).to_le_bytes());
                 }
                 self.buf.extend_from_slice(&p.object_id.to_le_bytes());
@@ -565,7 +570,12 @@ struct WavePacketLink {
 /// sample (the "anchor") is at `point + location · (X(t), Y(t), Z(t))` and
 /// the vector points from the echo back towards the scanner: minus the beam
 /// direction times c/2 per ps (two-way time).
-fn write_wave_packet(buf: &mut Vec<u8>, p: &PointRecord, link: Option<WavePacketLink>, bin_ps: u32) {
+fn write_wave_packet(
+    buf: &mut Vec<u8>,
+    p: &PointRecord,
+    link: Option<WavePacketLink>,
+    bin_ps: u32,
+) {
     let location = link.map(|l| p.echo_time_ps - l.first_sample_ps);
     match (link, location) {
         (Some(l), Some(loc))
@@ -591,7 +601,11 @@ impl WdpFile {
     /// Quantises and appends one pulse's samples, padded with zero signal
     /// to a multiple of [`WAVEFORM_SAMPLES_STEP`] (and cut after
     /// 255 × 16 samples).
-    fn write_packet(&mut self, samples: &[f32], first_sample_ps: f64) -> io::Result<WavePacketLink> {
+    fn write_packet(
+        &mut self,
+        samples: &[f32],
+        first_sample_ps: f64,
+    ) -> io::Result<WavePacketLink> {
         let max = WAVEFORM_DESCRIPTORS * WAVEFORM_SAMPLES_STEP;
         let used = samples.len().min(max);
         let n = used.div_ceil(WAVEFORM_SAMPLES_STEP).max(1) * WAVEFORM_SAMPLES_STEP;
@@ -602,7 +616,8 @@ impl WdpFile {
         };
         self.buf.clear();
         for &v in &samples[..used] {
-            self.buf.extend_from_slice(&count(f64::from(v)).to_le_bytes());
+            self.buf
+                .extend_from_slice(&count(f64::from(v)).to_le_bytes());
         }
         let zero = count(0.0);
         for _ in used..n {

@@ -1393,7 +1393,9 @@ impl Survey {
         };
         let offset_m = match &o.offset_m {
             None => DVec3::ZERO,
-            Some(v) => c.point(op.key("offset_m"), &Some(v.clone())).unwrap_or(DVec3::ZERO),
+            Some(v) => c
+                .point(op.key("offset_m"), &Some(v.clone()))
+                .unwrap_or(DVec3::ZERO),
         };
         if formats.las_waveform {
             let bin_ps = raw.receiver.bin_ps.unwrap_or(500.0);
