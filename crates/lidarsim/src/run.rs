@@ -86,8 +86,10 @@ pub struct Summary {
     pub plan: Plan,
 }
 
-/// Simulates `survey` and writes `points.las` / `points.xyz`,
-/// `trajectory.csv` and `summary.json` into `out_dir` (created if needed).
+/// Simulates `survey` and writes the point files of `[output] formats`
+/// (`points.las` with `points.wdp` for full waveforms, `points.laz`,
+/// `points.ply`, `points.xyz`), the trajectories, `report.html` and
+/// `summary.json` into `out_dir` (created if needed).
 /// Files appear under their final names only when complete.
 pub fn run_to_dir(
     survey: &Survey,

@@ -157,6 +157,9 @@ const EXTRA_BYTES_DESCRIPTOR_LEN: usize = 192;
 /// Size of a Waveform Packet Descriptor, bytes (LAS 1.4 R15, Table 17).
 const WAVE_DESCRIPTOR_LEN: usize = 26;
 
+/// One VLR: user ID, record ID, description, data.
+type Vlr = (&'static str, u16, String, Vec<u8>);
+
 /// Where the points' bytes go: straight to the file or through LASzip.
 enum Body {
     Plain,
@@ -312,8 +315,8 @@ impl LasWriter {
         Ok(LazVlr::from_laz_items(items))
     }
 
-    /// The VLRs between the header and the points, and their number.
-    fn vlr_list(&self) -> io::Result<Vec<(&'static str, u16, String, Vec<u8>)>> {
+    /// The VLRs between the header and the points.
+    fn vlr_list(&self) -> io::Result<Vec<Vlr>> {
         let mut list = Vec::new();
         let fields: Vec<&ExtraField> = self.extra_fields().collect();
         if !fields.is_empty() {
