@@ -171,13 +171,17 @@ def main(out):
     check(np.allclose(norm, C / 2 * 1e-12, rtol=1e-5) and np.all(np.einsum("ij,ij->i", dt / norm[:, None], -u) > 0.99999),
           f"(Xt,Yt,Zt) points to the sensor, |.| = {norm.mean() * 1000:.6f} mm/ps (c/2)")
 
-    # LAZ: the same points as the LAS file (point format 6 + extra bytes).
+    # LAZ: the same points as the LAS file, point format 9 too (the run asks
+    # for "las-waveform"), referring to the same points.wdp.
     laz = laspy.read(out / "points.laz")
-    check(laz.header.point_format.id == 6 and len(laz.points) == n, f"points.laz point format {laz.header.point_format.id}, {len(laz.points)} points")
-    same_laz = all(np.array_equal(np.asarray(laz[f]), np.asarray(las[f])) for f in
-                   ["X", "Y", "Z", "intensity", "return_number", "number_of_returns", "classification",
-                    "gps_time", "scan_angle", "point_source_id", "user_data"] + names)
-    check(same_laz, "points.laz fields equal points.las fields")
+    check(laz.header.point_format.id == 9 and len(laz.points) == n, f"points.laz point format {laz.header.point_format.id}, {len(laz.points)} points")
+    check(int(laz.header.global_encoding.value) & 0x04, "points.laz: waveforms external (bit 2)")
+    fields = ["X", "Y", "Z", "intensity", "return_number", "number_of_returns", "classification",
+              "gps_time", "scan_angle", "point_source_id", "user_data", "wavepacket_index",
+              "wavepacket_offset", "wavepacket_size", "return_point_wave_location",
+              "x_t", "y_t", "z_t"] + names
+    differ = [f for f in fields if not np.array_equal(np.asarray(laz[f]), np.asarray(las[f]), equal_nan=True)]
+    check(not differ, f"points.laz fields (wave packets included) equal points.las fields {differ}")
     check(laz.header.parse_crs().to_epsg() == 25832, "points.laz CRS EPSG:25832")
 
     # PLY.

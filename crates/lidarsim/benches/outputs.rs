@@ -58,10 +58,11 @@ fn main() {
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
     let base = las_settings(&survey, &bvh);
     let bin_ps = (survey.receiver.bin_s * 1e12).round() as u32;
-    let cases: [(&str, &[&str]); 5] = [
+    let cases: [(&str, &[&str]); 6] = [
         ("las", &["points.las"]),
         ("laz", &["points.laz"]),
         ("las-waveform", &["points.las", "points.wdp"]),
+        ("laz-waveform", &["points.laz", "points.wdp"]),
         ("ply", &["points.ply"]),
         ("xyz", &["points.xyz"]),
     ];
@@ -83,6 +84,17 @@ fn main() {
                 LasWriter::create(
                     &path,
                     LasSettings {
+                        waveform_bin_ps: Some(bin_ps),
+                        ..base.clone()
+                    },
+                )
+                .unwrap(),
+            ),
+            "laz-waveform" => Box::new(
+                LasWriter::create(
+                    &path,
+                    LasSettings {
+                        compressed: true,
                         waveform_bin_ps: Some(bin_ps),
                         ..base.clone()
                     },

@@ -142,8 +142,15 @@ pub fn run_to_dir(
     }
     if formats.laz {
         let path = out_dir.join("points.laz");
+        // With "las-waveform" too, the LAZ points are format 9 and refer to
+        // the points.wdp the LAS writer writes (same base name, same
+        // packets).
         let settings = LasSettings {
             compressed: true,
+            waveform_bin_ps: formats
+                .las_waveform
+                .then(|| (survey.receiver.bin_s * 1e12).round() as u32),
+            waveform_file_shared: true,
             ..las_settings(survey, &bvh)
         };
         sinks.push(Box::new(
@@ -395,6 +402,7 @@ pub fn las_settings(survey: &Survey, caster: &dyn RayCaster) -> LasSettings {
         crs_wkt: survey.output.crs_wkt.clone(),
         compressed: false,
         waveform_bin_ps: None,
+        waveform_file_shared: false,
     }
 }
 

@@ -118,7 +118,7 @@ impl Bytes {
 fn point_format_9_waveforms_follow_las_1_4_and_the_two_plane_geometry() {
     let (dir, summary) = run(
         &two_planes(
-            r#"formats = ["las-waveform"]
+            r#"formats = ["las-waveform", "laz"]
 crs = "EPSG:32633""#,
         ),
         "wave",
@@ -221,6 +221,11 @@ crs = "EPSG:32633""#,
             "{gap_ps} vs {want}"
         );
     }
+    // The LAZ file beside it is point format 9 too (bit 7: compressed),
+    // with the same header fields, and refers to the same points.wdp.
+    let laz = Bytes(std::fs::read(dir.join("points.laz")).unwrap());
+    assert_eq!((laz.0[104], laz.u16(105), laz.u16(6)), (0x89, 79, 0b1_0100));
+    assert_eq!(laz.u64(247), summary.points);
     println!(
         "{} pulses: anchors of the two echoes agree within {:.2} mm; \
          location gap / (2·5 m / c) − 1 ≤ {worst_gap:.5}",

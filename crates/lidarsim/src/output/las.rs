@@ -8,7 +8,8 @@
 //! 192-byte descriptors), Waveform Packet Descriptor VLRs (Table 17, 26
 //! bytes), OGC coordinate system WKT VLR (section 2.5, record 2112). All
 //! values little-endian. LAZ follows LASzip: the points are compressed by the
-//! `laz` crate (layered chunked compression of point 14 + extra bytes), the
+//! `laz` crate (layered chunked compression of point 14 (+ wave packet 14)
+//! + extra bytes), the
 //! "laszip encoded" VLR (record 22204) describes the items, and bit 7 of the
 //! point data format byte marks the file as compressed.
 
@@ -86,6 +87,10 @@ pub struct LasSettings {
     /// Write point format 9 with the waveforms in an external `.wdp` file
     /// beside the LAS file; the value is the sample spacing, ps.
     pub waveform_bin_ps: Option<u32>,
+    /// With `waveform_bin_ps`: the `.wdp` file is written by another writer
+    /// fed the same blocks (the LAS beside this LAZ file); this one only
+    /// computes the same packet offsets for its points.
+    pub waveform_file_shared: bool,
 }
 
 /// One extra-bytes field (LAS 1.4 R15, Table 24).
@@ -168,7 +173,8 @@ enum Body {
 
 /// The external waveform file and where its packets go.
 struct WdpFile {
-    file: AtomicFile,
+    /// `None` when another writer writes the same file.
+    file: Option<AtomicFile>,
     path: PathBuf,
     /// Offset of the next packet from the start of the file.
     next_offset: u64,
@@ -203,23 +209,23 @@ impl std::fmt::Debug for LasWriter {
 
 impl LasWriter {
     /// Creates `path` (as `path.partial` until finished), and with
-    /// waveforms the `.wdp` file of the same base name beside it.
+    /// waveforms the `.wdp` file of the same base name beside it (unless
+    /// `waveform_file_shared`).
     pub fn create(path: &Path, settings: LasSettings) -> io::Result<Self> {
-        if settings.compressed && settings.waveform_bin_ps.is_some() {
-            return Err(io::Error::new(
-                io::ErrorKind::InvalidInput,
-                "full waveforms are written to LAS (point format 9), not LAZ",
-            ));
-        }
         let file = AtomicFile::create(path)?;
         let wdp = match settings.waveform_bin_ps {
             None => None,
             Some(bin_ps) => {
                 let wdp_path = path.with_extension("wdp");
-                let mut f = AtomicFile::create(&wdp_path)?;
-                f.writer().write_all(&wdp_header(0))?;
+                let file = if settings.waveform_file_shared {
+                    None
+                } else {
+                    let mut f = AtomicFile::create(&wdp_path)?;
+                    f.writer().write_all(&wdp_header(0))?;
+                    Some(f)
+                };
                 Some(WdpFile {
-                    file: f,
+                    file,
                     path: wdp_path,
                     next_offset: WDP_HEADER_LEN,
                     bin_ps,
@@ -626,7 +632,9 @@ impl WdpFile {
         for _ in used..n {
             self.buf.extend_from_slice(&zero.to_le_bytes());
         }
-        self.file.writer().write_all(&self.buf)?;
+        if let Some(f) = self.file.as_mut() {
+            f.writer().write_all(&self.buf)?;
+        }
         let link = WavePacketLink {
             index: (n / WAVEFORM_SAMPLES_STEP) as u8,
             offset: self.next_offset,
@@ -681,14 +689,15 @@ impl PointSink for LasWriter {
         w.flush()?;
         w.seek(SeekFrom::Start(0))?;
         w.write_all(&header)?;
-        if let Some(mut wdp) = self.wdp.take() {
+        if let Some(wdp) = self.wdp.take()
+            && let Some(mut file) = wdp.file
+        {
             let len = wdp.next_offset - WDP_HEADER_LEN;
-            let w = wdp.file.writer();
+            let w = file.writer();
             w.flush()?;
             w.seek(SeekFrom::Start(0))?;
             w.write_all(&wdp_header(len))?;
-            wdp.file
-                .commit()
+            file.commit()
                 .map_err(|e| io::Error::new(e.kind(), format!("{}: {e}", wdp.path.display())))?;
         }
         self.file.commit()
