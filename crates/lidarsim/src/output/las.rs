@@ -8,10 +8,10 @@
 //! 192-byte descriptors), Waveform Packet Descriptor VLRs (Table 17, 26
 //! bytes), OGC coordinate system WKT VLR (section 2.5, record 2112). All
 //! values little-endian. LAZ follows LASzip: the points are compressed by the
-//! `laz` crate (layered chunked compression of point 14 (+ wave packet 14)
-//! + extra bytes), the
-//! "laszip encoded" VLR (record 22204) describes the items, and bit 7 of the
-//! point data format byte marks the file as compressed.
+//! `laz` crate (layered chunked compression of point 14, wave packet 14 for
+//! format 9, and the extra bytes), the "laszip encoded" VLR (record 22204)
+//! describes the items, and bit 7 of the point data format byte marks the
+//! file as compressed.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
