@@ -445,7 +445,7 @@ mod tests {
                     pulse_index: 0,
                     object_id: 0,
                     component: 0,
-                    incidence_angle_deg: 0.0,
+                    incidence_angle_deg: Some(0.0),
                     echo_time_ps: 0.0,
                 });
             }

@@ -325,7 +325,7 @@ impl<'a> Simulator<'a> {
             // Specification Eq. 1 with the observed pose and direction.
             let position = obs_origin + obs_central * measured_range;
             // Ground truth: the surface that put most energy into the echo.
-            let mut incidence_angle_deg = f64::NAN;
+            let mut incidence_angle_deg = None;
             let lo = echo.first_bin as f64;
             let hi = echo.last_bin as f64 + 1.0;
             scratch.energy_by_prim.clear();
@@ -358,9 +358,7 @@ impl<'a> Simulator<'a> {
                             **q == p && b >= lo && b < hi
                         })
                         .filter(|(_, n)| n.is_finite())
-                        .map_or(f64::NAN, |(_, n)| {
-                            central.dot(*n).abs().min(1.0).acos().to_degrees()
-                        });
+                        .map(|(_, n)| central.dot(*n).abs().min(1.0).acos().to_degrees());
                     let prim = &scene.primitives[p as usize];
                     let h = if prim.class == SurfaceClass::Vegetation {
                         self.height_above_ground(truth)

@@ -534,7 +534,7 @@ impl LasWriter {
                     p.amplitude,
                     p.echo_width_ns,
                     p.range_m,
-                    p.incidence_angle_deg,
+                    p.incidence_angle_deg.unwrap_or(f64::NAN),
                 ] {
                     self.buf.extend_from_slice(&(v as f32).to_le_bytes());
                 }

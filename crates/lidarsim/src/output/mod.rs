@@ -68,9 +68,9 @@ pub struct PointRecord {
     pub object_id: u32,
     /// Angle between the beam axis and the normal of the surface that
     /// returned most of the echo's energy (the normal where the first sub-ray
-    /// of that surface in the echo met it), degrees, 0–90; NaN for echoes
-    /// from foliage (no surface) and receiver noise.
-    pub incidence_angle_deg: f64,
+    /// of that surface in the echo met it), degrees, 0–90; `None` for
+    /// echoes from foliage (no surface) and receiver noise (files write NaN).
+    pub incidence_angle_deg: Option<f64>,
     /// Two-way travel time of the echo's peak since emission, ps (the
     /// detector's fitted position on the receiver's time axis, before any
     /// range noise).
