@@ -332,3 +332,13 @@ fn output_key_errors_name_the_key() {
     let s = Survey::from_toml(&two_planes(&format!("crs_wkt = '{wkt}'")), None).unwrap();
     assert_eq!(s.output.crs_wkt.as_deref(), Some(wkt.as_str()));
 }
+
+#[test]
+fn the_waveform_example_survey_is_valid() {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/waveform-utm.toml");
+    let s = Survey::load(&path).unwrap();
+    assert!(s.output.formats.las_waveform && s.output.formats.laz && s.output.formats.ply);
+    assert_eq!(s.output.crs_epsg, Some(3067));
+    assert_eq!(s.output.offset_m.to_array(), [385_000.0, 6_672_000.0, 10.0]);
+}
