@@ -57,7 +57,7 @@ fn main() {
     std::fs::create_dir_all(&dir).expect("output directory");
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
     let base = las_settings(&survey, &bvh);
-    let bin_ps = (survey.receiver.bin_s * 1e12).round() as u32;
+    let digitizer = lidarsim::run::digitizer(&survey, &bvh);
     let cases: [(&str, &[&str]); 6] = [
         ("las", &["points.las"]),
         ("laz", &["points.laz"]),
@@ -84,7 +84,7 @@ fn main() {
                 LasWriter::create(
                     &path,
                     LasSettings {
-                        waveform_bin_ps: Some(bin_ps),
+                        waveform: Some(digitizer),
                         ..base.clone()
                     },
                 )
@@ -95,7 +95,7 @@ fn main() {
                     &path,
                     LasSettings {
                         compressed: true,
-                        waveform_bin_ps: Some(bin_ps),
+                        waveform: Some(digitizer),
                         ..base.clone()
                     },
                 )

@@ -130,7 +130,7 @@ pub fn run_to_dir(
         let path = out_dir.join("points.las");
         let mut settings = las_settings(survey, &bvh);
         if formats.las_waveform {
-            settings.waveform_bin_ps = Some((survey.receiver.bin_s * 1e12).round() as u32);
+            settings.waveform = Some(digitizer(survey, &bvh));
         }
         sinks.push(Box::new(
             LasWriter::create(&path, settings).map_err(io_err(&path))?,
@@ -147,9 +147,7 @@ pub fn run_to_dir(
         // packets).
         let settings = LasSettings {
             compressed: true,
-            waveform_bin_ps: formats
-                .las_waveform
-                .then(|| (survey.receiver.bin_s * 1e12).round() as u32),
+            waveform: formats.las_waveform.then(|| digitizer(survey, &bvh)),
             waveform_file_shared: true,
             ..las_settings(survey, &bvh)
         };
@@ -401,9 +399,31 @@ pub fn las_settings(survey: &Survey, caster: &dyn RayCaster) -> LasSettings {
         attribute_extra_bytes: survey.output.extra_bytes,
         crs_wkt: survey.output.crs_wkt.clone(),
         compressed: false,
-        waveform_bin_ps: None,
+        waveform: None,
         waveform_file_shared: false,
     }
+}
+
+/// The waveform digitiser of a survey: its receiver's sample spacing, and
+/// a full scale of twice the strongest echo the survey can give without
+/// speckle — a white Lambertian surface filling the beam head-on at the
+/// closest range a flight line comes to the top of the scene, `(Rn / R)²`
+/// (specification Eq. 2) — and at least 1.
+pub fn digitizer(survey: &Survey, caster: &dyn RayCaster) -> crate::output::Digitizer {
+    let top = caster.scene().bounds();
+    let top_z = if top.is_empty() { 0.0 } else { top.max.z };
+    let closest = survey
+        .lines
+        .iter()
+        .map(|l| l.start_m.z.min(l.end_m.z) - top_z)
+        .fold(f64::INFINITY, f64::min)
+        .max(survey.scanner.min_range_m)
+        .max(1.0);
+    let rn = survey.receiver.reference_range_m;
+    crate::output::Digitizer::with_full_scale(
+        (survey.receiver.bin_s * 1e12).round() as u32,
+        (2.0 * (rn / closest).powi(2)).max(1.0),
+    )
 }
 
 /// Writes the trajectory, one row per `trajectory_interval_s` of each

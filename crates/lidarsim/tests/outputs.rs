@@ -145,6 +145,12 @@ crs = "EPSG:32633""#,
         assert_eq!(las.u32(o + 6), 500); // spacing, ps
     }
     let (gain, offset) = (las.f64(vlrs[1].2 + 10), las.f64(vlrs[1].2 + 18));
+    // Digitiser full scale: twice a white surface filling the beam at the
+    // closest range (300 m flight, roofs at 5 m; reference range 1000 m),
+    // counts from −full/16 to full.
+    let full = 2.0 * (1000.0 / (H - ROOF_M)).powi(2);
+    assert!((offset + full / 16.0).abs() < 1e-9, "{offset}");
+    assert!((offset + gain * 65535.0 - full).abs() < 1e-9);
     // The WKT VLR: UTM zone 33N, central meridian 15° E.
     let (user, id, o, len) = &vlrs[256];
     assert_eq!((user.as_str(), *id), ("LASF_Projection", 2112));

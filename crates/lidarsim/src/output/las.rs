@@ -32,14 +32,45 @@ const HEADER_SIZE: u16 = 375;
 
 /// Bits per waveform sample in the `.wdp` file.
 pub const WAVEFORM_BITS: u8 = 16;
-/// Digitiser gain of the stored samples: amplitude = offset + gain · count
-/// (LAS 1.4 R15, Table 17, "Digitizer Gain"). 2⁻¹¹ amplitude units per
-/// count resolves the receiver noise of every preset.
-pub const WAVEFORM_GAIN: f64 = 1.0 / 2048.0;
-/// Digitiser offset of the stored samples, amplitude units: counts span
-/// −2 … +30 (a white surface filling the beam at the reference range peaks
-/// at 1); stronger signals saturate at 65535 as a real digitiser would.
-pub const WAVEFORM_OFFSET: f64 = -2.0;
+/// The digitiser of the stored waveforms: sample spacing and the mapping
+/// of 16-bit counts to amplitude units, `amplitude = offset + gain · count`
+/// (LAS 1.4 R15, Table 17, "Digitizer Gain" and "Digitizer Offset").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Digitizer {
+    /// Temporal sample spacing, ps.
+    pub bin_ps: u32,
+    /// Amplitude units per count.
+    pub gain: f64,
+    /// Amplitude of count 0.
+    pub offset: f64,
+}
+
+impl Digitizer {
+    /// A digitiser whose counts span `−full_scale / 16 … full_scale`
+    /// amplitude units (the negative part keeps noise below the background
+    /// visible); stronger signals saturate at 65535 as a real digitiser's
+    /// would.
+    pub fn with_full_scale(bin_ps: u32, full_scale: f64) -> Self {
+        let full_scale = if full_scale.is_finite() && full_scale > 0.0 {
+            full_scale
+        } else {
+            1.0
+        };
+        let offset = -full_scale / 16.0;
+        Self {
+            bin_ps,
+            gain: (full_scale - offset) / 65535.0,
+            offset,
+        }
+    }
+
+    /// The count of an amplitude (rounded, saturating at 0 and 65535).
+    pub fn count(&self, amplitude: f64) -> u16 {
+        ((amplitude - self.offset) / self.gain)
+            .round()
+            .clamp(0.0, 65535.0) as u16
+    }
+}
 /// Waveform packets hold a multiple of this many samples; descriptor `i`
 /// (record ID 99 + i) describes packets of `i ×` this many samples.
 pub const WAVEFORM_SAMPLES_STEP: usize = 16;
@@ -84,10 +115,10 @@ pub struct LasSettings {
     pub crs_wkt: Option<String>,
     /// Compress the points (LAZ).
     pub compressed: bool,
-    /// Write point format 9 with the waveforms in an external `.wdp` file
-    /// beside the LAS file; the value is the sample spacing, ps.
-    pub waveform_bin_ps: Option<u32>,
-    /// With `waveform_bin_ps`: the `.wdp` file is written by another writer
+    /// Write point format 9 with the waveforms, digitised by this, in an
+    /// external `.wdp` file beside the LAS file.
+    pub waveform: Option<Digitizer>,
+    /// With `waveform`: the `.wdp` file is written by another writer
     /// fed the same blocks (the LAS beside this LAZ file); this one only
     /// computes the same packet offsets for its points.
     pub waveform_file_shared: bool,
@@ -178,8 +209,8 @@ struct WdpFile {
     path: PathBuf,
     /// Offset of the next packet from the start of the file.
     next_offset: u64,
-    /// Sample spacing, ps.
-    bin_ps: u32,
+    /// Sample spacing and quantisation.
+    digitizer: Digitizer,
     /// Quantised samples of one packet.
     buf: Vec<u8>,
 }
@@ -213,9 +244,9 @@ impl LasWriter {
     /// `waveform_file_shared`).
     pub fn create(path: &Path, settings: LasSettings) -> io::Result<Self> {
         let file = AtomicFile::create(path)?;
-        let wdp = match settings.waveform_bin_ps {
+        let wdp = match settings.waveform {
             None => None,
-            Some(bin_ps) => {
+            Some(digitizer) => {
                 let wdp_path = path.with_extension("wdp");
                 let file = if settings.waveform_file_shared {
                     None
@@ -228,7 +259,7 @@ impl LasWriter {
                     file,
                     path: wdp_path,
                     next_offset: WDP_HEADER_LEN,
-                    bin_ps,
+                    digitizer,
                     buf: Vec::new(),
                 })
             }
@@ -274,7 +305,7 @@ impl LasWriter {
 
     /// The point data record format: 6, or 9 with waveforms.
     pub fn point_format(&self) -> u8 {
-        if self.settings.waveform_bin_ps.is_some() {
+        if self.settings.waveform.is_some() {
             9
         } else {
             6
@@ -340,7 +371,7 @@ impl LasWriter {
             }
             list.push(("LASF_Spec", 4, "extra bytes".to_string(), d));
         }
-        if let Some(bin_ps) = self.settings.waveform_bin_ps {
+        if let Some(dig) = self.settings.waveform {
             for i in 1..=WAVEFORM_DESCRIPTORS {
                 // Waveform Packet Descriptor (Table 17): bits per sample,
                 // compression type 0, number of samples, temporal sample
@@ -350,9 +381,9 @@ impl LasWriter {
                 d.push(WAVEFORM_BITS);
                 d.push(0);
                 d.extend_from_slice(&((i * WAVEFORM_SAMPLES_STEP) as u32).to_le_bytes());
-                d.extend_from_slice(&bin_ps.to_le_bytes());
-                d.extend_from_slice(&WAVEFORM_GAIN.to_le_bytes());
-                d.extend_from_slice(&WAVEFORM_OFFSET.to_le_bytes());
+                d.extend_from_slice(&dig.bin_ps.to_le_bytes());
+                d.extend_from_slice(&dig.gain.to_le_bytes());
+                d.extend_from_slice(&dig.offset.to_le_bytes());
                 debug_assert_eq!(d.len(), WAVE_DESCRIPTOR_LEN);
                 list.push((
                     "LASF_Spec",
@@ -415,7 +446,7 @@ impl LasWriter {
         // in an external file; bit 4 WKT, which the specification requires
         // for point formats 6–10.
         let encoding: u16 = u16::from(s.adjusted_standard_gps_time)
-            | (u16::from(s.waveform_bin_ps.is_some()) << 2)
+            | (u16::from(s.waveform.is_some()) << 2)
             | (1 << 4);
         h.extend_from_slice(&encoding.to_le_bytes());
         h.extend_from_slice(&[0u8; 16]); // project ID (GUID)
@@ -527,7 +558,7 @@ impl LasWriter {
                         }
                     }
                 };
-                write_wave_packet(&mut self.buf, p, link, wdp.bin_ps);
+                write_wave_packet(&mut self.buf, p, link, wdp.digitizer.bin_ps);
             }
             if self.settings.attribute_extra_bytes {
                 for v in [
@@ -618,11 +649,7 @@ impl WdpFile {
         let max = WAVEFORM_DESCRIPTORS * WAVEFORM_SAMPLES_STEP;
         let used = samples.len().min(max);
         let n = used.div_ceil(WAVEFORM_SAMPLES_STEP).max(1) * WAVEFORM_SAMPLES_STEP;
-        let count = |v: f64| {
-            ((v - WAVEFORM_OFFSET) / WAVEFORM_GAIN)
-                .round()
-                .clamp(0.0, 65535.0) as u16
-        };
+        let count = |v: f64| self.digitizer.count(v);
         self.buf.clear();
         for &v in &samples[..used] {
             self.buf
