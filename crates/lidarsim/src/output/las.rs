@@ -732,3 +732,37 @@ impl PointSink for LasWriter {
 
     fn discard(self: Box<Self>) {}
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn digitizer_counts_span_minus_a_sixteenth_to_full_scale() {
+        let d = Digitizer::with_full_scale(500, 32.0);
+        assert_eq!(d.offset, -2.0);
+        assert_eq!(d.count(-2.0), 0);
+        assert_eq!(d.count(32.0), 65535);
+        assert_eq!(d.count(1e9), 65535); // saturates
+        assert_eq!(d.count(-1e9), 0);
+        // Zero signal at 1/17 of the range; a count maps back within half a
+        // count.
+        assert_eq!(d.count(0.0), (65535.0f64 / 17.0).round() as u16);
+        let v = 1.234_567;
+        assert!((d.offset + d.gain * f64::from(d.count(v)) - v).abs() <= d.gain / 2.0);
+        // A useless full scale falls back to 1.
+        assert_eq!(
+            Digitizer::with_full_scale(500, f64::NAN).offset,
+            -1.0 / 16.0
+        );
+    }
+
+    #[test]
+    fn wdp_header_is_an_evlr_header() {
+        let h = wdp_header(1234);
+        assert_eq!(h.len() as u64, WDP_HEADER_LEN);
+        assert_eq!(&h[2..11], b"LASF_Spec");
+        assert_eq!(u16::from_le_bytes([h[18], h[19]]), 65535);
+        assert_eq!(u64::from_le_bytes(h[20..28].try_into().unwrap()), 1234);
+    }
+}
