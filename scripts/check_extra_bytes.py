@@ -11,10 +11,11 @@ import numpy as np
 
 las = laspy.read(sys.argv[1] + "/points.las")
 names = list(las.point_format.extra_dimension_names)
-ok = names == ["error_x", "error_y", "error_z"]
+ok = names == ["amplitude", "echo_width", "range", "incidence_angle", "object_id",
+               "error_x", "error_y", "error_z"]
 print(f"extra dimensions {names}")
 if ok:
-    e = np.stack([np.asarray(las[n]) for n in names], axis=1)
+    e = np.stack([np.asarray(las[n]) for n in names[5:]], axis=1)
     ok = np.allclose(e, [0.25, -0.5, 0.125], atol=1e-6)
     ok = ok and np.allclose(np.asarray(las.z), 0.125, atol=0.011)
     print(f"{len(e)} points, error vector {e.mean(axis=0)}")

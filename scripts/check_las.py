@@ -112,6 +112,23 @@ def main(out):
     inten = np.asarray(las.intensity)
     check(inten.min() >= 0 and np.median(inten) > 1000, "intensities recorded")
 
+    # Echo attributes as extra bytes, by name.
+    names = list(las.point_format.extra_dimension_names)
+    check(names == ["amplitude", "echo_width", "range", "incidence_angle", "object_id"],
+          f"extra bytes {names}")
+    inc = np.asarray(las.incidence_angle, dtype=np.float64)
+    no_surface = (comp == 1) | (cls == 7)
+    check(np.all(np.isnan(inc) == no_surface), "incidence angle NaN exactly for foliage and noise echoes")
+    # Level ground: the incidence angle is the beam's angle from the
+    # vertical, i.e. the scan angle up to the along-track sway (<= 0.6 deg).
+    town_ground = ground & ~in_forest & (np.abs(z) < 0.02)
+    d_inc = np.abs(inc[town_ground] - np.abs(sa[town_ground]))
+    check(np.percentile(d_inc, 99) < 0.7, f"town ground incidence = |scan angle|: 99th percentile of difference {np.percentile(d_inc, 99):.3f} deg")
+    rng = np.asarray(las["range"], dtype=np.float64)
+    check(np.all((rng > 370) & (rng < 430)), f"ranges from 400 m altitude: {rng.min():.1f}..{rng.max():.1f} m")
+    check(np.allclose(inten, np.clip(np.round(summary["intensity_gain"] * np.asarray(las.amplitude, dtype=np.float64)), 0, 65535), atol=1),
+          "intensity = gain x amplitude extra byte")
+
     # The text output holds the same points (first 100 000).
     with open(out / "points.xyz") as f:
         head = f.readline().split()

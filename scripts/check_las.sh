@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Runs the built-in demo and validates its LAS file with laspy (an
-# independent reader), installing laspy and lazrs into target/pyenv.
+# independent reader), then every output format (LAS with full waveform,
+# LAZ, PLY, XYZ, CRS) on scripts/fixtures/two-planes.toml, installing laspy,
+# lazrs and pyproj into target/pyenv.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -8,8 +10,9 @@ venv=target/pyenv
 if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
-if ! "$venv/bin/python" -c "import laspy, lazrs, numpy" 2>/dev/null; then
-  "$venv/bin/pip" install --quiet --disable-pip-version-check "laspy>=2.5" "lazrs>=0.6" numpy
+if ! "$venv/bin/python" -c "import laspy, lazrs, numpy, pyproj" 2>/dev/null; then
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
+    "laspy>=2.5" "lazrs>=0.6" numpy "pyproj>=3.6"
 fi
 
 out=target/demo-check
@@ -21,3 +24,8 @@ cargo run --release --quiet -- demo -o "$out"
 rm -rf target/extra-bytes-check
 cargo run --release --quiet -- run scripts/fixtures/gnss-bias.toml -o target/extra-bytes-check > /dev/null
 "$venv/bin/python" scripts/check_extra_bytes.py target/extra-bytes-check
+
+# Every point format, read by laspy, laspy+lazrs, pyproj and numpy.
+rm -rf target/outputs-check
+cargo run --release --quiet -- run scripts/fixtures/two-planes.toml -o target/outputs-check > /dev/null
+"$venv/bin/python" scripts/check_outputs.py target/outputs-check

@@ -86,9 +86,9 @@ enum Command {
         #[arg(short, long, default_value = "waveform.png")]
         output: PathBuf,
     },
-    /// Render a LAS file (ours or anyone's) as a top view or a cross-section PNG.
+    /// Render a LAS or LAZ file (ours or anyone's) as a top view or a cross-section PNG.
     Render {
-        /// The point cloud (LAS).
+        /// The point cloud (LAS or LAZ).
         cloud: PathBuf,
         /// Output PNG.
         #[arg(short, long, default_value = "top.png")]

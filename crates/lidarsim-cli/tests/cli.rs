@@ -379,6 +379,51 @@ fn render_writes_top_views_and_profiles_and_rejects_bad_options() {
 }
 
 #[test]
+fn render_reads_laz_and_point_format_9() {
+    // The fixture writes points.las (format 9 + points.wdp), points.laz
+    // (format 9, compressed), points.ply and points.xyz.
+    let dir = temp("render-laz");
+    let fixture =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scripts/fixtures/two-planes.toml");
+    let out = dir.join("out");
+    let o = bin()
+        .arg("run")
+        .arg(&fixture)
+        .arg("-o")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "points.las",
+        "points.wdp",
+        "points.laz",
+        "points.ply",
+        "points.xyz",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    for cloud in ["points.las", "points.laz"] {
+        let png = dir.join(format!("{cloud}.png"));
+        let o = bin()
+            .arg("render")
+            .arg(out.join(cloud))
+            .arg("-o")
+            .arg(&png)
+            .args(["--color", "class"])
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{cloud}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_eq!(&std::fs::read(&png).unwrap()[..8], b"\x89PNG\r\n\x1a\n");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn waveform_plots_a_pulse_of_a_run() {
     let dir = temp("waveform");
     let (o, out) = run_survey(&dir, GOOD);

@@ -57,6 +57,30 @@ pub struct Plan {
     pub flight_time_s: f64,
 }
 
+/// Size of `points.las` with one point per pulse: the header, the VLRs
+/// (Extra Bytes: 54 + 192 per field; waveform packet descriptors: 255 ×
+/// (54 + 26); WKT: 54 + its length + 1) and the point records (30 bytes for
+/// format 6 or 59 for format 9, 20 of echo attributes, 12 of error vector).
+fn expected_las_bytes(survey: &Survey, pulses: u64) -> u64 {
+    let o = &survey.output;
+    let errors = !survey.navigation.is_zero();
+    let fields = 5 * u64::from(o.extra_bytes) + 3 * u64::from(errors);
+    let mut header = 375;
+    if fields > 0 {
+        header += 54 + 192 * fields;
+    }
+    if o.formats.las_waveform {
+        header += 255 * (54 + 26);
+    }
+    if let Some(wkt) = &o.crs_wkt {
+        header += 54 + wkt.len() as u64 + 1;
+    }
+    let record = if o.formats.las_waveform { 59 } else { 30 }
+        + 20 * u64::from(o.extra_bytes)
+        + 12 * u64::from(errors);
+    header + record * pulses
+}
+
 /// Height of the ground below `p` (ground, road or water surfaces; any
 /// surface if none of those lies below; `z = 0` if nothing does).
 pub fn ground_below(caster: &dyn RayCaster, p: DVec3) -> f64 {
@@ -124,13 +148,7 @@ pub fn plan(survey: &Survey, caster: &dyn RayCaster) -> Plan {
         swath_width_m: weighted(|l| l.swath_width_m),
         point_density_per_m2: weighted(|l| l.point_density_per_m2),
         footprint_diameter_m: weighted(|l| l.footprint_diameter_m),
-        // Header, plus the Extra Bytes VLR (54 + 3 × 192 bytes) and 12 bytes
-        // per point when error vectors are written.
-        expected_las_bytes: if survey.navigation.is_zero() {
-            375 + 30 * pulses
-        } else {
-            375 + 630 + 42 * pulses
-        },
+        expected_las_bytes: expected_las_bytes(survey, pulses),
         flight_time_s,
         pulses,
         lines,

@@ -433,6 +433,7 @@ mod tests {
                     amplitude: 0.0,
                     echo_width_ns: 4.0,
                     range_m: 100.0,
+                    beam_dir: -DVec3::Z,
                     error_m: DVec3::ZERO,
                     return_number: 1,
                     number_of_returns: 1,
@@ -444,6 +445,8 @@ mod tests {
                     pulse_index: 0,
                     object_id: 0,
                     component: 0,
+                    incidence_angle_deg: Some(0.0),
+                    echo_time_ps: 0.0,
                 });
             }
         }

@@ -7,7 +7,9 @@ use serde::Serialize;
 
 use crate::accel::{Bvh, RayCaster};
 use crate::navigation::observed_pose;
-use crate::output::{AtomicFile, LasSettings, LasWriter, PointSink, XyzWriter, write_atomic};
+use crate::output::{
+    AtomicFile, LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter, write_atomic,
+};
 use crate::plan::{Plan, plan};
 use crate::report::ReportSink;
 use crate::sim::{RunCounts, Simulator, Timer};
@@ -84,8 +86,10 @@ pub struct Summary {
     pub plan: Plan,
 }
 
-/// Simulates `survey` and writes `points.las` / `points.xyz`,
-/// `trajectory.csv` and `summary.json` into `out_dir` (created if needed).
+/// Simulates `survey` and writes the point files of `[output] formats`
+/// (`points.las` with `points.wdp` for full waveforms, `points.laz`,
+/// `points.ply`, `points.xyz`), the trajectories, `report.html` and
+/// `summary.json` into `out_dir` (created if needed).
 /// Files appear under their final names only when complete.
 pub fn run_to_dir(
     survey: &Survey,
@@ -111,16 +115,59 @@ pub fn run_to_dir(
 
     let mut files = Vec::new();
     let mut sinks: Vec<Box<dyn PointSink>> = Vec::new();
-    if survey.output.formats.las {
+    let formats = &survey.output.formats;
+    let origin = survey.output.offset_m.to_array();
+    // A waveform file from an earlier run must not sit beside this one's
+    // points.
+    let wdp_path = out_dir.join("points.wdp");
+    if !formats.las_waveform {
+        match std::fs::remove_file(&wdp_path) {
+            Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(io_err(&wdp_path)(e)),
+            _ => {}
+        }
+    }
+    if formats.las {
         let path = out_dir.join("points.las");
+        let mut settings = las_settings(survey, &bvh);
+        if formats.las_waveform {
+            settings.waveform = Some(digitizer(survey, &bvh));
+        }
         sinks.push(Box::new(
-            LasWriter::create(&path, las_settings(survey, &bvh)).map_err(io_err(&path))?,
+            LasWriter::create(&path, settings).map_err(io_err(&path))?,
         ));
         files.push("points.las".to_string());
+        if formats.las_waveform {
+            files.push("points.wdp".to_string());
+        }
     }
-    if survey.output.formats.xyz {
+    if formats.laz {
+        let path = out_dir.join("points.laz");
+        // With "las-waveform" too, the LAZ points are format 9 and refer to
+        // the points.wdp the LAS writer writes (same base name, same
+        // packets).
+        let settings = LasSettings {
+            compressed: true,
+            waveform: formats.las_waveform.then(|| digitizer(survey, &bvh)),
+            waveform_file_shared: true,
+            ..las_settings(survey, &bvh)
+        };
+        sinks.push(Box::new(
+            LasWriter::create(&path, settings).map_err(io_err(&path))?,
+        ));
+        files.push("points.laz".to_string());
+    }
+    if formats.ply {
+        let path = out_dir.join("points.ply");
+        sinks.push(Box::new(
+            PlyWriter::create(&path, origin).map_err(io_err(&path))?,
+        ));
+        files.push("points.ply".to_string());
+    }
+    if formats.xyz {
         let path = out_dir.join("points.xyz");
-        sinks.push(Box::new(XyzWriter::create(&path).map_err(io_err(&path))?));
+        sinks.push(Box::new(
+            XyzWriter::create(&path, origin).map_err(io_err(&path))?,
+        ));
         files.push("points.xyz".to_string());
     }
 
@@ -146,7 +193,7 @@ pub fn run_to_dir(
     }
 
     let mut report = ReportSink::new(covered_area(survey, &bvh, &plan), plan.point_density_per_m2);
-    let sim = Simulator::new(survey, &bvh);
+    let sim = Simulator::new(survey, &bvh).with_waveforms(formats.las_waveform);
     let timer = Timer::start();
     let mut refs: Vec<&mut (dyn PointSink + 'static)> =
         sinks.iter_mut().map(|b| b.as_mut()).collect();
@@ -313,16 +360,20 @@ pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
     raw
 }
 
-/// LAS header settings: offset at the scene centre rounded to 100 m (so
-/// that coordinates stay small integers), the survey's scale, the creation
-/// date from `SOURCE_DATE_EPOCH` if set (reproducible files) or today.
+/// LAS header settings: offset at the scene centre (plus `[output]
+/// offset_m`) rounded to 100 m (so that coordinates stay small integers),
+/// the survey's scale, the creation date from `SOURCE_DATE_EPOCH` if set
+/// (reproducible files) or today, echo attributes and error vector as extra
+/// bytes, the CRS; point format 6, uncompressed.
 pub fn las_settings(survey: &Survey, caster: &dyn RayCaster) -> LasSettings {
     let b = caster.scene().bounds();
-    let c = if b.is_empty() {
-        crate::geometry::DVec3::ZERO
-    } else {
-        b.center()
-    };
+    let origin = survey.output.offset_m;
+    let c = origin
+        + if b.is_empty() {
+            crate::geometry::DVec3::ZERO
+        } else {
+            b.center()
+        };
     let round = |v: f64| (v / 100.0).round() * 100.0;
     let now = std::env::var("SOURCE_DATE_EPOCH")
         .ok()
@@ -334,7 +385,8 @@ pub fn las_settings(survey: &Survey, caster: &dyn RayCaster) -> LasSettings {
         });
     LasSettings {
         scale_m: survey.output.las_scale_m,
-        offset_m: [round(c.x), round(c.y), 0.0],
+        offset_m: [round(c.x), round(c.y), round(origin.z)],
+        origin_m: origin.to_array(),
         adjusted_standard_gps_time: survey.output.gps_start_time_s.is_some(),
         file_source_id: if survey.lines.len() == 1 {
             (survey.lines[0].index + 1) as u16
@@ -344,7 +396,34 @@ pub fn las_settings(survey: &Survey, caster: &dyn RayCaster) -> LasSettings {
         creation_day_year: crate::output::day_of_year(now),
         generating_software: format!("lidarsim {}", env!("CARGO_PKG_VERSION")),
         error_extra_bytes: !survey.navigation.is_zero(),
+        attribute_extra_bytes: survey.output.extra_bytes,
+        crs_wkt: survey.output.crs_wkt.clone(),
+        compressed: false,
+        waveform: None,
+        waveform_file_shared: false,
     }
+}
+
+/// The waveform digitiser of a survey: its receiver's sample spacing, and
+/// a full scale of twice the strongest echo the survey can give without
+/// speckle — a white Lambertian surface filling the beam head-on at the
+/// closest range a flight line comes to the top of the scene, `(Rn / R)²`
+/// (specification Eq. 2) — and at least 1.
+pub fn digitizer(survey: &Survey, caster: &dyn RayCaster) -> crate::output::Digitizer {
+    let top = caster.scene().bounds();
+    let top_z = if top.is_empty() { 0.0 } else { top.max.z };
+    let closest = survey
+        .lines
+        .iter()
+        .map(|l| l.start_m.z.min(l.end_m.z) - top_z)
+        .fold(f64::INFINITY, f64::min)
+        .max(survey.scanner.min_range_m)
+        .max(1.0);
+    let rn = survey.receiver.reference_range_m;
+    crate::output::Digitizer::with_full_scale(
+        (survey.receiver.bin_s * 1e12).round() as u32,
+        (2.0 * (rn / closest).powi(2)).max(1.0),
+    )
 }
 
 /// Writes the trajectory, one row per `trajectory_interval_s` of each
@@ -356,6 +435,7 @@ pub fn write_trajectory(survey: &Survey, path: &Path, observed: bool) -> io::Res
     let mut f = AtomicFile::create(path)?;
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
     let dt = survey.output.trajectory_interval_s;
+    let origin = survey.output.offset_m;
     let w = f.writer();
     writeln!(w, "gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line")?;
     for line in &survey.lines {
@@ -372,9 +452,9 @@ pub fn write_trajectory(survey: &Survey, path: &Path, observed: bool) -> io::Res
                 w,
                 "{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}",
                 offset + line.start_time_s + t,
-                p.position_m.x,
-                p.position_m.y,
-                p.position_m.z,
+                p.position_m.x + origin.x,
+                p.position_m.y + origin.y,
+                p.position_m.z + origin.z,
                 p.attitude.roll_rad.to_degrees(),
                 p.attitude.pitch_rad.to_degrees(),
                 p.attitude.yaw_rad.to_degrees(),

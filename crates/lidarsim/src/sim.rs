@@ -20,7 +20,7 @@ use crate::canopy::{CanopyConfig, Fate, march};
 use crate::detection::{Detector, Echo};
 use crate::geometry::{DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
 use crate::navigation::observed_pose;
-use crate::output::{PointRecord, PointSink};
+use crate::output::{PointRecord, PointSink, WaveformBlock, WaveformPacket};
 use crate::platform::FlightLine;
 use crate::radiometry::{Speckle, surface_return};
 use crate::rng::{Purpose, Stream};
@@ -75,6 +75,9 @@ pub struct Scratch {
     returns: Vec<Return>,
     /// Primitive of each return (parallel to `returns`).
     return_prims: Vec<u32>,
+    /// Surface normal at each return (parallel to `returns`; NaN for
+    /// foliage).
+    return_normals: Vec<DVec3>,
     waveform: Waveform,
     signal: Vec<f64>,
     peaks: Vec<usize>,
@@ -110,6 +113,8 @@ pub struct Simulator<'a> {
     speckle: Option<Speckle>,
     canopy: CanopyConfig,
     time_offset_s: f64,
+    /// Keep each pulse's waveform for the sinks (full-waveform output).
+    record_waveforms: bool,
     /// Boresight misalignment of the real scanner (identity without).
     boresight: DMat3,
     /// True when no navigation or measurement error is configured.
@@ -133,7 +138,16 @@ impl<'a> Simulator<'a> {
             receiver,
             detector,
             time_offset_s: survey.output.gps_start_time_s.unwrap_or(0.0),
+            record_waveforms: false,
         }
+    }
+
+    /// Makes [`Simulator::run`] hand every pulse's recorded waveform to the
+    /// sinks with its points ([`PointSink::write_block`]); off by default,
+    /// when it costs nothing.
+    pub fn with_waveforms(mut self, on: bool) -> Self {
+        self.record_waveforms = on;
+        self
     }
 
     /// The survey.
@@ -204,6 +218,7 @@ impl<'a> Simulator<'a> {
         let mut canopy_rng = Stream::new(s.seed, line.index, k, Purpose::Canopy);
         scratch.returns.clear();
         scratch.return_prims.clear();
+        scratch.return_normals.clear();
         for (i, (dir, share)) in scratch.dirs.iter().zip(self.pattern.weights()).enumerate() {
             let spans = scratch.trace.spans_of(i);
             let fate = if spans.is_empty() {
@@ -212,7 +227,7 @@ impl<'a> Simulator<'a> {
                 let ray = Ray { origin, dir: *dir };
                 march(scene, &ray, spans, &self.canopy, &mut canopy_rng)
             };
-            let (range_m, prim, mut power) = match fate {
+            let (range_m, prim, mut power, normal) = match fate {
                 Fate::Intercepted {
                     t,
                     prim,
@@ -223,7 +238,7 @@ impl<'a> Simulator<'a> {
                     // Foliage: no incidence term (specification, "LiDAR
                     // pulse in vegetation").
                     let power = share * transmission * (rn / t).powi(2) * mat.reflectance * density;
-                    (t, prim, power)
+                    (t, prim, power, DVec3::NAN)
                 }
                 Fate::Passed { transmission } => {
                     let Some(hit) = scratch.trace.hits[i] else {
@@ -241,7 +256,7 @@ impl<'a> Simulator<'a> {
                             cos_inc,
                             mat.incidence_exponent,
                         );
-                    (hit.t, hit.prim, power)
+                    (hit.t, hit.prim, power, hit.normal)
                 }
             };
             if let Some(sp) = &self.speckle {
@@ -249,6 +264,7 @@ impl<'a> Simulator<'a> {
             }
             scratch.returns.push(Return { range_m, power });
             scratch.return_prims.push(prim);
+            scratch.return_normals.push(normal);
         }
         if scratch.returns.is_empty() {
             scratch.waveform.samples.clear();
@@ -308,6 +324,7 @@ impl<'a> Simulator<'a> {
             // Specification Eq. 1 with the observed pose and direction.
             let position = obs_origin + obs_central * measured_range;
             // Ground truth: the surface that put most energy into the echo.
+            let mut incidence_angle_deg = None;
             let lo = echo.first_bin as f64;
             let hi = echo.last_bin as f64 + 1.0;
             scratch.energy_by_prim.clear();
@@ -328,6 +345,19 @@ impl<'a> Simulator<'a> {
                 .reduce(|a, b| if b.1 > a.1 { b } else { a });
             let (classification, object_id, component) = match best {
                 Some((p, _)) => {
+                    // Incidence on the dominant surface: its normal where
+                    // the first of its sub-rays in the echo met it.
+                    incidence_angle_deg = scratch
+                        .returns
+                        .iter()
+                        .zip(&scratch.return_prims)
+                        .zip(&scratch.return_normals)
+                        .find(|((r, q), _)| {
+                            let b = range_to_bin(r.range_m, bin_s);
+                            **q == p && b >= lo && b < hi
+                        })
+                        .filter(|(_, n)| n.is_finite())
+                        .map(|(_, n)| central.dot(*n).abs().min(1.0).acos().to_degrees());
                     let prim = &scene.primitives[p as usize];
                     let h = if prim.class == SurfaceClass::Vegetation {
                         self.height_above_ground(truth)
@@ -352,6 +382,7 @@ impl<'a> Simulator<'a> {
                 amplitude: echo.amplitude,
                 echo_width_ns: echo.width_ns,
                 range_m: measured_range,
+                beam_dir: obs_central,
                 error_m: position - truth,
                 return_number: (i + 1) as u8,
                 number_of_returns: n as u8,
@@ -363,6 +394,8 @@ impl<'a> Simulator<'a> {
                 pulse_index: k,
                 object_id,
                 component,
+                incidence_angle_deg,
+                echo_time_ps: echo.bin * bin_s * 1e12,
             });
         }
         n
@@ -393,13 +426,41 @@ impl<'a> Simulator<'a> {
         k1: u64,
         scratch: &mut Scratch,
     ) -> (Vec<PointRecord>, RunCounts) {
+        self.simulate_block_recording(line, k0, k1, scratch, None)
+    }
+
+    /// Simulates pulses `[k0, k1)` of `line`; with `waveforms`, also keeps
+    /// the waveform of every pulse that has an echo there (the whole window
+    /// the receiver synthesised: from before the first sub-ray return by the
+    /// pulse's rise to after the last by its tail, see
+    /// [`Receiver::synthesize`]).
+    pub fn simulate_block_recording(
+        &self,
+        line: &FlightLine,
+        k0: u64,
+        k1: u64,
+        scratch: &mut Scratch,
+        mut waveforms: Option<&mut WaveformBlock>,
+    ) -> (Vec<PointRecord>, RunCounts) {
         let mut points = Vec::with_capacity(((k1 - k0) as usize) * 2);
         let mut counts = RunCounts::default();
+        let bin_ps = self.survey.receiver.bin_s * 1e12;
         for k in k0..k1 {
             let n = self.simulate_pulse(line, k, scratch, &mut points);
             counts.pulses += 1;
             if n > 0 {
                 counts.pulses_with_echo += 1;
+                if let Some(w) = waveforms.as_deref_mut() {
+                    let wf = &scratch.waveform;
+                    w.packets.push(WaveformPacket {
+                        point_source_id: (line.index + 1).min(u16::MAX as u32) as u16,
+                        pulse_index: k,
+                        first_sample_ps: wf.first_bin as f64 * bin_ps,
+                        start: w.samples.len(),
+                        len: wf.samples.len(),
+                    });
+                    w.samples.extend(wf.samples.iter().map(|&v| v as f32));
+                }
             }
         }
         counts.points = points.len() as u64;
@@ -424,14 +485,15 @@ impl<'a> Simulator<'a> {
             .build()
             .map_err(io::Error::other)?;
         let batch_blocks = 4 * threads.max(1) as u64;
-        let (tx, rx) = mpsc::sync_channel::<Vec<(Vec<PointRecord>, RunCounts)>>(2);
+        type Block = (Vec<PointRecord>, RunCounts, WaveformBlock);
+        let (tx, rx) = mpsc::sync_channel::<Vec<Block>>(2);
         std::thread::scope(|scope| {
             let writer = scope.spawn(move || -> io::Result<RunCounts> {
                 let mut total = RunCounts::default();
                 for batch in rx {
-                    for (points, counts) in batch {
+                    for (points, counts, waveforms) in batch {
                         for sink in sinks.iter_mut() {
-                            sink.write(&points)?;
+                            sink.write_block(&points, &waveforms)?;
                         }
                         total.add(&counts);
                     }
@@ -452,7 +514,11 @@ impl<'a> Simulator<'a> {
                             .map_init(Scratch::default, |scratch, blk| {
                                 let k0 = blk * BLOCK_PULSES;
                                 let k1 = (k0 + BLOCK_PULSES).min(n);
-                                self.simulate_block(line, k0, k1, scratch)
+                                let mut waves = WaveformBlock::default();
+                                let record = self.record_waveforms.then_some(&mut waves);
+                                let (points, counts) =
+                                    self.simulate_block_recording(line, k0, k1, scratch, record);
+                                (points, counts, waves)
                             })
                             .collect()
                     });

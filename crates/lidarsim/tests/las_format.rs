@@ -175,18 +175,59 @@ fn raw_header_bytes_follow_the_specification() {
     assert_eq!(u16_at(6), 0b1_0001); // adjusted standard GPS time + WKT
     assert_eq!((bytes[24], bytes[25]), (1, 4));
     assert_eq!(u16_at(94), 375); // header size
-    assert_eq!(u32_at(96), 375); // offset to point data
-    assert_eq!(u32_at(100), 0); // VLRs
+    // One VLR, the Extra Bytes VLR: 54-byte header + 5 descriptors of 192.
+    let first = 375 + 54 + 5 * 192;
+    assert_eq!(u32_at(96), first as u32); // offset to point data
+    assert_eq!(u32_at(100), 1); // VLRs
     assert_eq!(bytes[104], 6); // point format
-    assert_eq!(u16_at(105), 30); // record length
+    // Format 6 (30 bytes) + amplitude, echo width, range, incidence angle
+    // (f32) and object id (u32).
+    assert_eq!(u16_at(105), 50); // record length
     assert_eq!(u32_at(107), 0); // legacy count is zero for format 6
     assert_eq!(f64_at(131), 0.001); // x scale
     assert_eq!(u64_at(247), summary.points); // number of point records
     assert_eq!(u64_at(255), summary.points); // first returns
-    assert_eq!(bytes.len() as u64, 375 + 30 * summary.points);
-    // First point record: GPS time at offset 22 within the 30 bytes.
-    let t0 = f64_at(375 + 22);
+    assert_eq!(bytes.len() as u64, first as u64 + 50 * summary.points);
+    // VLR header (Table 13): user ID at +2, record ID 4 at +18, length at
+    // +20; descriptor names at +4 of each 192-byte descriptor.
+    assert_eq!(&bytes[375 + 2..375 + 11], b"LASF_Spec");
+    assert_eq!(u16_at(375 + 18), 4);
+    assert_eq!(u16_at(375 + 20), 5 * 192);
+    let names: Vec<String> = (0..5)
+        .map(|k| {
+            let d = &bytes[375 + 54 + k * 192..];
+            String::from_utf8_lossy(&d[4..36])
+                .trim_end_matches('\0')
+                .to_string()
+        })
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "amplitude",
+            "echo_width",
+            "range",
+            "incidence_angle",
+            "object_id"
+        ]
+    );
+    // First point record: GPS time at offset 22 within the 30 bytes, then
+    // the extra bytes: range (m) at +38 equals the flying height over the
+    // level ground divided by the cosine of the scan angle (i16 at +18, in
+    // 0.006°), incidence angle at +42 equals that scan angle.
+    let t0 = f64_at(first + 22);
     assert_eq!(t0, 400_000_000.0);
+    for k in 0..summary.points as usize {
+        let rec = first + 50 * k;
+        let angle = f64::from(i16::from_le_bytes([bytes[rec + 18], bytes[rec + 19]])) * 0.006;
+        let f32_at = |o: usize| f64::from(f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()));
+        let range = f32_at(rec + 38);
+        assert!(
+            (range - H / angle.to_radians().cos()).abs() < 0.05,
+            "{range}"
+        );
+        assert!((f32_at(rec + 42) - angle.abs()).abs() < 0.01);
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -195,18 +236,19 @@ fn error_vectors_are_extra_bytes_with_a_descriptor() {
     let (dir, summary) = run_flat("[gnss]\nbias_m = [0.25, -0.5, 0.125]", "extra", 2);
     let mut reader = las::Reader::from_path(dir.join("points.las")).unwrap();
     let header = reader.header().clone();
-    // Point format 6 with 12 extra bytes, described by one Extra Bytes VLR
-    // (user ID LASF_Spec, record ID 4) of three 192-byte descriptors.
-    assert_eq!(header.point_format().len(), 42);
-    assert_eq!(header.point_format().extra_bytes, 12);
+    // Point format 6 with 20 bytes of echo attributes and 12 of error
+    // vector, described by one Extra Bytes VLR (user ID LASF_Spec, record
+    // ID 4) of eight 192-byte descriptors.
+    assert_eq!(header.point_format().len(), 62);
+    assert_eq!(header.point_format().extra_bytes, 32);
     let vlr = header
         .vlrs()
         .iter()
         .find(|v| v.user_id == "LASF_Spec" && v.record_id == 4)
         .expect("Extra Bytes VLR");
-    assert_eq!(vlr.data.len(), 3 * 192);
+    assert_eq!(vlr.data.len(), 8 * 192);
     for (k, name) in ["error_x", "error_y", "error_z"].iter().enumerate() {
-        let d = &vlr.data[k * 192..(k + 1) * 192];
+        let d = &vlr.data[(k + 5) * 192..(k + 6) * 192];
         assert_eq!(d[2], 9, "data type float");
         assert_eq!(&d[4..4 + name.len()], name.as_bytes());
     }
@@ -218,8 +260,7 @@ fn error_vectors_are_extra_bytes_with_a_descriptor() {
         .unwrap();
     assert_eq!(points.len() as u64, summary.points);
     for p in &points {
-        let e: Vec<f32> = p
-            .extra_bytes
+        let e: Vec<f32> = p.extra_bytes[20..]
             .chunks(4)
             .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
             .collect();

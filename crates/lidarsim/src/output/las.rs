@@ -1,25 +1,98 @@
-//! LAS 1.4 writer, point data record format 6.
+//! LAS 1.4 writer: point data record format 6, or 9 with full waveforms in
+//! an external `.wdp` file; optionally LAZ-compressed.
 //!
 //! Byte layout from the ASPRS LAS Specification 1.4 R15 (9 July 2019):
-//! public header block (Table 3, 375 bytes), point data record format 6
-//! (Table 8, 30 bytes). All values little-endian.
+//! public header block (Table 3, 375 bytes), VLR header (Table 13, 54
+//! bytes), point data record formats 6 (Table 8, 30 bytes) and 9 (Table 11:
+//! format 6 followed by the 29-byte wave packet), Extra Bytes VLR (Table 24,
+//! 192-byte descriptors), Waveform Packet Descriptor VLRs (Table 17, 26
+//! bytes), OGC coordinate system WKT VLR (section 2.5, record 2112). All
+//! values little-endian. LAZ follows LASzip: the points are compressed by the
+//! `laz` crate (layered chunked compression of point 14, wave packet 14 for
+//! format 9, and the extra bytes), the "laszip encoded" VLR (record 22204)
+//! describes the items, and bit 7 of the point data format byte marks the
+//! file as compressed.
 
-use std::io::{self, Seek, SeekFrom, Write};
-use std::path::Path;
+use std::fs::File;
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
 
-use super::{AtomicFile, PointRecord, PointSink};
+use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
+
+use super::{AtomicFile, PointRecord, PointSink, WaveformBlock};
+use crate::geometry::SPEED_OF_LIGHT_MPS;
 
 /// Size of a point data record of format 6, bytes.
 pub const POINT_FORMAT_6_LEN: u16 = 30;
+/// Size of a point data record of format 9, bytes: format 6 plus the wave
+/// packet (descriptor index u8, byte offset u64, packet size u32, return
+/// point waveform location f32, X(t), Y(t), Z(t) f32).
+pub const POINT_FORMAT_9_LEN: u16 = 59;
 const HEADER_SIZE: u16 = 375;
+
+/// Bits per waveform sample in the `.wdp` file.
+pub const WAVEFORM_BITS: u8 = 16;
+/// The digitiser of the stored waveforms: sample spacing and the mapping
+/// of 16-bit counts to amplitude units, `amplitude = offset + gain · count`
+/// (LAS 1.4 R15, Table 17, "Digitizer Gain" and "Digitizer Offset").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Digitizer {
+    /// Temporal sample spacing, ps.
+    pub bin_ps: u32,
+    /// Amplitude units per count.
+    pub gain: f64,
+    /// Amplitude of count 0.
+    pub offset: f64,
+}
+
+impl Digitizer {
+    /// A digitiser whose counts span `−full_scale / 16 … full_scale`
+    /// amplitude units (the negative part keeps noise below the background
+    /// visible); stronger signals saturate at 65535 as a real digitiser's
+    /// would.
+    pub fn with_full_scale(bin_ps: u32, full_scale: f64) -> Self {
+        let full_scale = if full_scale.is_finite() && full_scale > 0.0 {
+            full_scale
+        } else {
+            1.0
+        };
+        let offset = -full_scale / 16.0;
+        Self {
+            bin_ps,
+            gain: (full_scale - offset) / 65535.0,
+            offset,
+        }
+    }
+
+    /// The count of an amplitude (rounded, saturating at 0 and 65535).
+    pub fn count(&self, amplitude: f64) -> u16 {
+        ((amplitude - self.offset) / self.gain)
+            .round()
+            .clamp(0.0, 65535.0) as u16
+    }
+}
+/// Waveform packets hold a multiple of this many samples; descriptor `i`
+/// (record ID 99 + i) describes packets of `i ×` this many samples.
+pub const WAVEFORM_SAMPLES_STEP: usize = 16;
+/// Number of waveform packet descriptors written (indices 1–255, all the
+/// specification allows), so packets can hold up to 4080 samples.
+pub const WAVEFORM_DESCRIPTORS: usize = 255;
+/// Size of the header at the start of the `.wdp` file (an EVLR header,
+/// LAS 1.4 R15 Table 21), bytes; packet offsets count from the start of the
+/// file, so the first packet is at this offset.
+pub const WDP_HEADER_LEN: u64 = 60;
 
 /// Fixed parts of the header chosen before the first point.
 #[derive(Clone, Debug, PartialEq)]
 pub struct LasSettings {
     /// Coordinate resolution, m (same on all axes).
     pub scale_m: f64,
-    /// Offset subtracted before scaling, m.
+    /// Offset subtracted before scaling, m (in output coordinates, i.e.
+    /// after `origin_m` is added).
     pub offset_m: [f64; 3],
+    /// Added to every world position before it is stored (`[output]
+    /// offset_m`: local world frame → projected coordinates), m.
+    pub origin_m: [f64; 3],
     /// True when GPS time is Adjusted Standard GPS Time (global encoding
     /// bit 0); false when it is seconds of a GPS week, which is what
     /// readers assume for our seconds-since-flight-start.
@@ -30,30 +103,125 @@ pub struct LasSettings {
     pub creation_day_year: (u16, u16),
     /// Generating software, up to 32 bytes.
     pub generating_software: String,
+    /// Append the echo attributes (`amplitude`, `echo_width`, `range`,
+    /// `incidence_angle`, `object_id`) to every point as LAS 1.4 extra
+    /// bytes, described by an Extra Bytes VLR.
+    pub attribute_extra_bytes: bool,
     /// Append the georeferencing error vector (`error_x`, `error_y`,
-    /// `error_z`, 32-bit floats, m) to every point as LAS 1.4 extra bytes,
-    /// described by an Extra Bytes VLR.
+    /// `error_z`, 32-bit floats, m) as extra bytes after the attributes.
     pub error_extra_bytes: bool,
+    /// OGC coordinate system WKT written as a VLR (user ID
+    /// `LASF_Projection`, record 2112), if any.
+    pub crs_wkt: Option<String>,
+    /// Compress the points (LAZ).
+    pub compressed: bool,
+    /// Write point format 9 with the waveforms, digitised by this, in an
+    /// external `.wdp` file beside the LAS file.
+    pub waveform: Option<Digitizer>,
+    /// With `waveform`: the `.wdp` file is written by another writer
+    /// fed the same blocks (the LAS beside this LAZ file); this one only
+    /// computes the same packet offsets for its points.
+    pub waveform_file_shared: bool,
 }
 
-/// Names and descriptions of the error extra bytes.
-const ERROR_FIELDS: [(&str, &str); 3] = [
-    ("error_x", "computed minus true x (m)"),
-    ("error_y", "computed minus true y (m)"),
-    ("error_z", "computed minus true z (m)"),
+/// One extra-bytes field (LAS 1.4 R15, Table 24).
+struct ExtraField {
+    name: &'static str,
+    description: &'static str,
+    /// Data type code: 5 unsigned long, 9 float.
+    data_type: u8,
+}
+
+impl ExtraField {
+    fn size(&self) -> u16 {
+        4
+    }
+}
+
+/// The echo attributes as extra bytes, in record order.
+const ATTRIBUTE_FIELDS: [ExtraField; 5] = [
+    ExtraField {
+        name: "amplitude",
+        description: "echo energy / unit pulse energy",
+        data_type: 9,
+    },
+    ExtraField {
+        name: "echo_width",
+        description: "echo width FWHM (ns)",
+        data_type: 9,
+    },
+    ExtraField {
+        name: "range",
+        description: "range from the sensor (m)",
+        data_type: 9,
+    },
+    ExtraField {
+        name: "incidence_angle",
+        description: "beam to normal (deg), NaN=foliage",
+        data_type: 9,
+    },
+    ExtraField {
+        name: "object_id",
+        description: "scene object that returned it",
+        data_type: 5,
+    },
+];
+
+/// The georeferencing error as extra bytes.
+const ERROR_FIELDS: [ExtraField; 3] = [
+    ExtraField {
+        name: "error_x",
+        description: "computed minus true x (m)",
+        data_type: 9,
+    },
+    ExtraField {
+        name: "error_y",
+        description: "computed minus true y (m)",
+        data_type: 9,
+    },
+    ExtraField {
+        name: "error_z",
+        description: "computed minus true z (m)",
+        data_type: 9,
+    },
 ];
 
 /// Size of a VLR header, bytes (LAS 1.4 R15, Table 13).
 const VLR_HEADER_LEN: usize = 54;
 /// Size of one Extra Bytes descriptor, bytes (LAS 1.4 R15, Table 24).
 const EXTRA_BYTES_DESCRIPTOR_LEN: usize = 192;
+/// Size of a Waveform Packet Descriptor, bytes (LAS 1.4 R15, Table 17).
+const WAVE_DESCRIPTOR_LEN: usize = 26;
 
-/// Streams points into a LAS 1.4 file; the header (counts, bounds) is
-/// written again when the file is finished.
-#[derive(Debug)]
+/// One VLR: user ID, record ID, description, data.
+type Vlr = (&'static str, u16, String, Vec<u8>);
+
+/// Where the points' bytes go: straight to the file or through LASzip.
+enum Body {
+    Plain,
+    Laz(Box<LasZipCompressor<'static, BufWriter<File>>>),
+}
+
+/// The external waveform file and where its packets go.
+struct WdpFile {
+    /// `None` when another writer writes the same file.
+    file: Option<AtomicFile>,
+    path: PathBuf,
+    /// Offset of the next packet from the start of the file.
+    next_offset: u64,
+    /// Sample spacing and quantisation.
+    digitizer: Digitizer,
+    /// Quantised samples of one packet.
+    buf: Vec<u8>,
+}
+
+/// Streams points into a LAS 1.4 (or LAZ) file; the header (counts,
+/// bounds) is written again when the file is finished.
 pub struct LasWriter {
     file: AtomicFile,
     settings: LasSettings,
+    body: Body,
+    wdp: Option<WdpFile>,
     count: u64,
     by_return: [u64; 15],
     min: [i32; 3],
@@ -61,12 +229,46 @@ pub struct LasWriter {
     buf: Vec<u8>,
 }
 
+impl std::fmt::Debug for LasWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("LasWriter")
+            .field("settings", &self.settings)
+            .field("count", &self.count)
+            .finish_non_exhaustive()
+    }
+}
+
 impl LasWriter {
-    /// Creates `path` (as `path.partial` until finished).
+    /// Creates `path` (as `path.partial` until finished), and with
+    /// waveforms the `.wdp` file of the same base name beside it (unless
+    /// `waveform_file_shared`).
     pub fn create(path: &Path, settings: LasSettings) -> io::Result<Self> {
+        let file = AtomicFile::create(path)?;
+        let wdp = match settings.waveform {
+            None => None,
+            Some(digitizer) => {
+                let wdp_path = path.with_extension("wdp");
+                let file = if settings.waveform_file_shared {
+                    None
+                } else {
+                    let mut f = AtomicFile::create(&wdp_path)?;
+                    f.writer().write_all(&wdp_header(0))?;
+                    Some(f)
+                };
+                Some(WdpFile {
+                    file,
+                    path: wdp_path,
+                    next_offset: WDP_HEADER_LEN,
+                    digitizer,
+                    buf: Vec::new(),
+                })
+            }
+        };
         let mut w = Self {
-            file: AtomicFile::create(path)?,
+            file,
             settings,
+            body: Body::Plain,
+            wdp,
             count: 0,
             by_return: [0; 15],
             min: [i32::MAX; 3],
@@ -74,9 +276,15 @@ impl LasWriter {
             buf: Vec::with_capacity(1 << 16),
         };
         let header = w.header();
-        let vlrs = w.vlrs();
+        let vlrs = w.vlrs()?;
         w.file.writer().write_all(&header)?;
         w.file.writer().write_all(&vlrs)?;
+        if w.settings.compressed {
+            let writer = w.file.take_writer();
+            let compressor =
+                LasZipCompressor::new(writer, w.laz_vlr()?).map_err(io::Error::other)?;
+            w.body = Body::Laz(Box::new(compressor));
+        }
         Ok(w)
     }
 
@@ -95,55 +303,151 @@ impl LasWriter {
         }
     }
 
+    /// The point data record format: 6, or 9 with waveforms.
+    pub fn point_format(&self) -> u8 {
+        if self.settings.waveform.is_some() {
+            9
+        } else {
+            6
+        }
+    }
+
+    /// The extra-bytes fields, in record order.
+    fn extra_fields(&self) -> impl Iterator<Item = &'static ExtraField> {
+        let a: &'static [ExtraField] = if self.settings.attribute_extra_bytes {
+            &ATTRIBUTE_FIELDS
+        } else {
+            &[]
+        };
+        let e: &'static [ExtraField] = if self.settings.error_extra_bytes {
+            &ERROR_FIELDS
+        } else {
+            &[]
+        };
+        a.iter().chain(e.iter())
+    }
+
+    fn extra_bytes_len(&self) -> u16 {
+        self.extra_fields().map(ExtraField::size).sum()
+    }
+
     /// Bytes of one point record.
-    fn record_len(&self) -> u16 {
-        POINT_FORMAT_6_LEN
-            + if self.settings.error_extra_bytes {
-                12
-            } else {
-                0
-            }
+    pub fn record_len(&self) -> u16 {
+        let base = if self.point_format() == 9 {
+            POINT_FORMAT_9_LEN
+        } else {
+            POINT_FORMAT_6_LEN
+        };
+        base + self.extra_bytes_len()
+    }
+
+    /// The LASzip description of the point record: point 14 (+ wave packet
+    /// 14) + extra bytes, layered chunked compression.
+    fn laz_vlr(&self) -> io::Result<LazVlr> {
+        let items = LazItemRecordBuilder::default_for_point_format_id(
+            self.point_format(),
+            self.extra_bytes_len(),
+        )
+        .map_err(io::Error::other)?;
+        Ok(LazVlr::from_laz_items(items))
     }
 
     /// The VLRs between the header and the points.
-    fn vlrs(&self) -> Vec<u8> {
-        let mut v = Vec::new();
-        if self.settings.error_extra_bytes {
-            // VLR header (Table 13): reserved, user ID, record ID, length
-            // after header, description.
-            v.extend_from_slice(&0u16.to_le_bytes());
-            v.extend_from_slice(&fixed_str::<16>("LASF_Spec"));
-            v.extend_from_slice(&4u16.to_le_bytes());
-            let len = (ERROR_FIELDS.len() * EXTRA_BYTES_DESCRIPTOR_LEN) as u16;
-            v.extend_from_slice(&len.to_le_bytes());
-            v.extend_from_slice(&fixed_str::<32>("georeferencing errors"));
-            for (name, description) in ERROR_FIELDS {
-                // Extra Bytes descriptor (Table 24): reserved, data type 9
-                // (float), options 0 (no no-data/min/max/scale/offset), name,
-                // unused, no_data, min, max, scale, offset, description.
-                v.extend_from_slice(&[0, 0, 9, 0]);
-                v.extend_from_slice(&fixed_str::<32>(name));
-                v.extend_from_slice(&[0u8; 4]);
-                v.extend_from_slice(&[0u8; 24 * 5]);
-                v.extend_from_slice(&fixed_str::<32>(description));
+    fn vlr_list(&self) -> io::Result<Vec<Vlr>> {
+        let mut list = Vec::new();
+        let fields: Vec<&ExtraField> = self.extra_fields().collect();
+        if !fields.is_empty() {
+            let mut d = Vec::with_capacity(fields.len() * EXTRA_BYTES_DESCRIPTOR_LEN);
+            for f in fields {
+                // Extra Bytes descriptor (Table 24): reserved (2), data type,
+                // options 0 (no no-data/min/max/scale/offset), name (32),
+                // unused (4), no_data, min, max, scale, offset (5 × 24),
+                // description (32).
+                d.extend_from_slice(&[0, 0, f.data_type, 0]);
+                d.extend_from_slice(&fixed_str::<32>(f.name));
+                d.extend_from_slice(&[0u8; 4]);
+                d.extend_from_slice(&[0u8; 24 * 5]);
+                d.extend_from_slice(&fixed_str::<32>(f.description));
             }
-            debug_assert_eq!(
-                v.len(),
-                VLR_HEADER_LEN + ERROR_FIELDS.len() * EXTRA_BYTES_DESCRIPTOR_LEN
-            );
+            list.push(("LASF_Spec", 4, "extra bytes".to_string(), d));
         }
-        v
+        if let Some(dig) = self.settings.waveform {
+            for i in 1..=WAVEFORM_DESCRIPTORS {
+                // Waveform Packet Descriptor (Table 17): bits per sample,
+                // compression type 0, number of samples, temporal sample
+                // spacing (ps), digitizer gain, digitizer offset
+                // (volts = offset + gain · sample).
+                let mut d = Vec::with_capacity(WAVE_DESCRIPTOR_LEN);
+                d.push(WAVEFORM_BITS);
+                d.push(0);
+                d.extend_from_slice(&((i * WAVEFORM_SAMPLES_STEP) as u32).to_le_bytes());
+                d.extend_from_slice(&dig.bin_ps.to_le_bytes());
+                d.extend_from_slice(&dig.gain.to_le_bytes());
+                d.extend_from_slice(&dig.offset.to_le_bytes());
+                debug_assert_eq!(d.len(), WAVE_DESCRIPTOR_LEN);
+                list.push((
+                    "LASF_Spec",
+                    99 + i as u16,
+                    format!("{} samples", i * WAVEFORM_SAMPLES_STEP),
+                    d,
+                ));
+            }
+        }
+        if let Some(wkt) = &self.settings.crs_wkt {
+            // OGC coordinate system WKT (section 2.5): a null-terminated
+            // string.
+            let mut d = wkt.as_bytes().to_vec();
+            d.push(0);
+            if d.len() > usize::from(u16::MAX) {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    "the CRS WKT is longer than a VLR can hold (65535 bytes)",
+                ));
+            }
+            list.push(("LASF_Projection", 2112, "OGC WKT".to_string(), d));
+        }
+        if self.settings.compressed {
+            let mut d = Vec::new();
+            self.laz_vlr()?.write_to(&mut d)?;
+            list.push(("laszip encoded", 22204, "lazrs".to_string(), d));
+        }
+        Ok(list)
+    }
+
+    /// The VLRs' bytes.
+    fn vlrs(&self) -> io::Result<Vec<u8>> {
+        let mut v = Vec::new();
+        for (user, id, description, data) in self.vlr_list()? {
+            // VLR header (Table 13): reserved, user ID, record ID, record
+            // length after header, description.
+            v.extend_from_slice(&0u16.to_le_bytes());
+            v.extend_from_slice(&fixed_str::<16>(user));
+            v.extend_from_slice(&id.to_le_bytes());
+            v.extend_from_slice(&(data.len() as u16).to_le_bytes());
+            v.extend_from_slice(&fixed_str::<32>(&description));
+            v.extend_from_slice(&data);
+        }
+        Ok(v)
     }
 
     /// The 375-byte public header block (LAS 1.4 R15, Table 3).
     fn header(&self) -> Vec<u8> {
         let s = &self.settings;
+        let list = self.vlr_list().unwrap_or_default();
+        let vlr_count = list.len() as u32;
+        let vlr_bytes: usize = list
+            .iter()
+            .map(|(_, _, _, d)| VLR_HEADER_LEN + d.len())
+            .sum();
         let mut h = Vec::with_capacity(HEADER_SIZE as usize);
         h.extend_from_slice(b"LASF");
         h.extend_from_slice(&s.file_source_id.to_le_bytes());
-        // Global encoding: bit 0 GPS time type; bit 4 WKT, which the
-        // specification requires for point formats 6–10.
-        let encoding: u16 = u16::from(s.adjusted_standard_gps_time) | (1 << 4);
+        // Global encoding: bit 0 GPS time type; bit 2 waveform data packets
+        // in an external file; bit 4 WKT, which the specification requires
+        // for point formats 6–10.
+        let encoding: u16 = u16::from(s.adjusted_standard_gps_time)
+            | (u16::from(s.waveform.is_some()) << 2)
+            | (1 << 4);
         h.extend_from_slice(&encoding.to_le_bytes());
         h.extend_from_slice(&[0u8; 16]); // project ID (GUID)
         h.extend_from_slice(&[1, 4]); // version 1.4
@@ -152,10 +456,10 @@ impl LasWriter {
         h.extend_from_slice(&s.creation_day_year.0.to_le_bytes());
         h.extend_from_slice(&s.creation_day_year.1.to_le_bytes());
         h.extend_from_slice(&HEADER_SIZE.to_le_bytes());
-        let vlrs = self.vlrs().len() as u32;
-        h.extend_from_slice(&(u32::from(HEADER_SIZE) + vlrs).to_le_bytes()); // offset to points
-        h.extend_from_slice(&u32::from(vlrs > 0).to_le_bytes()); // number of VLRs
-        h.push(6); // point data record format
+        h.extend_from_slice(&(u32::from(HEADER_SIZE) + vlr_bytes as u32).to_le_bytes()); // offset to points
+        h.extend_from_slice(&vlr_count.to_le_bytes());
+        // Point data record format; bit 7 marks LASzip compression.
+        h.push(self.point_format() | if s.compressed { 0x80 } else { 0 });
         h.extend_from_slice(&self.record_len().to_le_bytes());
         // Legacy point counts: zero for point formats 6–10.
         h.extend_from_slice(&0u32.to_le_bytes());
@@ -178,7 +482,9 @@ impl LasWriter {
             h.extend_from_slice(&max[a].to_le_bytes());
             h.extend_from_slice(&min[a].to_le_bytes());
         }
-        h.extend_from_slice(&0u64.to_le_bytes()); // start of waveform data packet record
+        // Start of waveform data packet record: zero, the packets are in the
+        // external file.
+        h.extend_from_slice(&0u64.to_le_bytes());
         h.extend_from_slice(&0u64.to_le_bytes()); // start of first EVLR
         h.extend_from_slice(&0u32.to_le_bytes()); // number of EVLRs
         h.extend_from_slice(&self.count.to_le_bytes());
@@ -188,24 +494,19 @@ impl LasWriter {
         debug_assert_eq!(h.len(), HEADER_SIZE as usize);
         h
     }
-}
 
-fn fixed_str<const N: usize>(s: &str) -> [u8; N] {
-    let mut out = [0u8; N];
-    let b = s.as_bytes();
-    let n = b.len().min(N);
-    out[..n].copy_from_slice(&b[..n]);
-    out
-}
-
-impl PointSink for LasWriter {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    /// Encodes the points (and writes their waveform packets).
+    fn encode(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
         self.buf.clear();
+        let mut cursor = 0;
+        // (pulse key, wave packet fields) of the packet last written.
+        let mut current: Option<((u16, u64), WavePacketLink)> = None;
+        let o = self.settings.origin_m;
         for p in points {
             let xyz = [
-                self.quantize(p.position_m.x, 0)?,
-                self.quantize(p.position_m.y, 1)?,
-                self.quantize(p.position_m.z, 2)?,
+                self.quantize(p.position_m.x + o[0], 0)?,
+                self.quantize(p.position_m.y + o[1], 1)?,
+                self.quantize(p.position_m.z + o[2], 2)?,
             ];
             for (a, q) in xyz.iter().enumerate() {
                 self.min[a] = self.min[a].min(*q);
@@ -230,6 +531,46 @@ impl PointSink for LasWriter {
             self.buf.extend_from_slice(&sa.to_le_bytes());
             self.buf.extend_from_slice(&p.point_source_id.to_le_bytes());
             self.buf.extend_from_slice(&p.gps_time_s.to_le_bytes());
+            if let Some(wdp) = self.wdp.as_mut() {
+                let key = (p.point_source_id, p.pulse_index);
+                let link = match current {
+                    Some((k, link)) if k == key => Some(link),
+                    _ => {
+                        // Packets are in pulse order like the points.
+                        while cursor < waveforms.packets.len()
+                            && (
+                                waveforms.packets[cursor].point_source_id,
+                                waveforms.packets[cursor].pulse_index,
+                            ) != key
+                        {
+                            cursor += 1;
+                        }
+                        match waveforms.packets.get(cursor) {
+                            Some(packet) => {
+                                let link = wdp.write_packet(
+                                    waveforms.samples_of(packet),
+                                    packet.first_sample_ps,
+                                )?;
+                                current = Some((key, link));
+                                Some(link)
+                            }
+                            None => None,
+                        }
+                    }
+                };
+                write_wave_packet(&mut self.buf, p, link, wdp.digitizer.bin_ps);
+            }
+            if self.settings.attribute_extra_bytes {
+                for v in [
+                    p.amplitude,
+                    p.echo_width_ns,
+                    p.range_m,
+                    p.incidence_angle_deg.unwrap_or(f64::NAN),
+                ] {
+                    self.buf.extend_from_slice(&(v as f32).to_le_bytes());
+                }
+                self.buf.extend_from_slice(&p.object_id.to_le_bytes());
+            }
             if self.settings.error_extra_bytes {
                 for e in [p.error_m.x, p.error_m.y, p.error_m.z] {
                     self.buf.extend_from_slice(&(e as f32).to_le_bytes());
@@ -238,17 +579,190 @@ impl PointSink for LasWriter {
             self.count += 1;
             self.by_return[usize::from(rn) - 1] += 1;
         }
-        self.file.writer().write_all(&self.buf)
+        match &mut self.body {
+            Body::Plain => self.file.writer().write_all(&self.buf),
+            Body::Laz(c) => c.compress_many(&self.buf),
+        }
+    }
+}
+
+/// Where a pulse's packet went in the `.wdp` file.
+#[derive(Clone, Copy, Debug)]
+struct WavePacketLink {
+    /// Descriptor index (1–255).
+    index: u8,
+    /// Byte offset from the start of the `.wdp` file.
+    offset: u64,
+    /// Packet size, bytes.
+    size: u32,
+    /// Two-way time of the first sample, ps.
+    first_sample_ps: f64,
+    /// Samples in the packet.
+    samples: usize,
+}
+
+/// Appends the 29-byte wave packet of format 9 (LAS 1.4 R15, Table 11).
+///
+/// Return point waveform location: ps from the first digitised sample to
+/// the echo. X(t), Y(t), Z(t): the parametric line of the waveform, in
+/// metres per ps, as LASlib reads it: sample `s` lies at
+/// `point + (location − s · spacing) · (X(t), Y(t), Z(t))`, so the first
+/// sample (the "anchor") is at `point + location · (X(t), Y(t), Z(t))` and
+/// the vector points from the echo back towards the scanner: minus the beam
+/// direction times c/2 per ps (two-way time).
+fn write_wave_packet(
+    buf: &mut Vec<u8>,
+    p: &PointRecord,
+    link: Option<WavePacketLink>,
+    bin_ps: u32,
+) {
+    let location = link.map(|l| p.echo_time_ps - l.first_sample_ps);
+    match (link, location) {
+        (Some(l), Some(loc))
+            if loc.is_finite()
+                && loc >= 0.0
+                && loc <= ((l.samples.max(1) - 1) as f64) * f64::from(bin_ps) =>
+        {
+            buf.push(l.index);
+            buf.extend_from_slice(&l.offset.to_le_bytes());
+            buf.extend_from_slice(&l.size.to_le_bytes());
+            buf.extend_from_slice(&(loc as f32).to_le_bytes());
+            let per_ps = -p.beam_dir * (SPEED_OF_LIGHT_MPS / 2.0 * 1e-12);
+            for v in [per_ps.x, per_ps.y, per_ps.z] {
+                buf.extend_from_slice(&(v as f32).to_le_bytes());
+            }
+        }
+        // No waveform for this point (descriptor index 0).
+        _ => buf.extend_from_slice(&[0u8; 29]),
+    }
+}
+
+impl WdpFile {
+    /// Quantises and appends one pulse's samples, padded with zero signal
+    /// to a multiple of [`WAVEFORM_SAMPLES_STEP`] (and cut after
+    /// 255 × 16 samples).
+    fn write_packet(
+        &mut self,
+        samples: &[f32],
+        first_sample_ps: f64,
+    ) -> io::Result<WavePacketLink> {
+        let max = WAVEFORM_DESCRIPTORS * WAVEFORM_SAMPLES_STEP;
+        let used = samples.len().min(max);
+        let n = used.div_ceil(WAVEFORM_SAMPLES_STEP).max(1) * WAVEFORM_SAMPLES_STEP;
+        let count = |v: f64| self.digitizer.count(v);
+        self.buf.clear();
+        for &v in &samples[..used] {
+            self.buf
+                .extend_from_slice(&count(f64::from(v)).to_le_bytes());
+        }
+        let zero = count(0.0);
+        for _ in used..n {
+            self.buf.extend_from_slice(&zero.to_le_bytes());
+        }
+        if let Some(f) = self.file.as_mut() {
+            f.writer().write_all(&self.buf)?;
+        }
+        let link = WavePacketLink {
+            index: (n / WAVEFORM_SAMPLES_STEP) as u8,
+            offset: self.next_offset,
+            size: self.buf.len() as u32,
+            first_sample_ps,
+            samples: used,
+        };
+        self.next_offset += self.buf.len() as u64;
+        Ok(link)
+    }
+}
+
+/// The 60-byte header that starts a `.wdp` file: the EVLR header of the
+/// waveform data packet record (LAS 1.4 R15, Table 21: reserved, user ID
+/// `LASF_Spec`, record ID 65535, record length after header u64,
+/// description), as LASlib writes it.
+fn wdp_header(record_len: u64) -> Vec<u8> {
+    let mut h = Vec::with_capacity(WDP_HEADER_LEN as usize);
+    h.extend_from_slice(&0u16.to_le_bytes());
+    h.extend_from_slice(&fixed_str::<16>("LASF_Spec"));
+    h.extend_from_slice(&65535u16.to_le_bytes());
+    h.extend_from_slice(&record_len.to_le_bytes());
+    h.extend_from_slice(&fixed_str::<32>("lidarsim waveforms"));
+    debug_assert_eq!(h.len() as u64, WDP_HEADER_LEN);
+    h
+}
+
+fn fixed_str<const N: usize>(s: &str) -> [u8; N] {
+    let mut out = [0u8; N];
+    let b = s.as_bytes();
+    let n = b.len().min(N);
+    out[..n].copy_from_slice(&b[..n]);
+    out
+}
+
+impl PointSink for LasWriter {
+    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+        self.encode(points, &WaveformBlock::default())
+    }
+
+    fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
+        self.encode(points, waveforms)
     }
 
     fn finish(mut self: Box<Self>) -> io::Result<()> {
+        if let Body::Laz(mut c) = std::mem::replace(&mut self.body, Body::Plain) {
+            c.done()?;
+            self.file.put_writer(c.into_inner());
+        }
         let header = self.header();
         let w = self.file.writer();
         w.flush()?;
         w.seek(SeekFrom::Start(0))?;
         w.write_all(&header)?;
+        if let Some(wdp) = self.wdp.take()
+            && let Some(mut file) = wdp.file
+        {
+            let len = wdp.next_offset - WDP_HEADER_LEN;
+            let w = file.writer();
+            w.flush()?;
+            w.seek(SeekFrom::Start(0))?;
+            w.write_all(&wdp_header(len))?;
+            file.commit()
+                .map_err(|e| io::Error::new(e.kind(), format!("{}: {e}", wdp.path.display())))?;
+        }
         self.file.commit()
     }
 
     fn discard(self: Box<Self>) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn digitizer_counts_span_minus_a_sixteenth_to_full_scale() {
+        let d = Digitizer::with_full_scale(500, 32.0);
+        assert_eq!(d.offset, -2.0);
+        assert_eq!(d.count(-2.0), 0);
+        assert_eq!(d.count(32.0), 65535);
+        assert_eq!(d.count(1e9), 65535); // saturates
+        assert_eq!(d.count(-1e9), 0);
+        // Zero signal at 1/17 of the range; a count maps back within half a
+        // count.
+        assert_eq!(d.count(0.0), (65535.0f64 / 17.0).round() as u16);
+        let v = 1.234_567;
+        assert!((d.offset + d.gain * f64::from(d.count(v)) - v).abs() <= d.gain / 2.0);
+        // A useless full scale falls back to 1.
+        assert_eq!(
+            Digitizer::with_full_scale(500, f64::NAN).offset,
+            -1.0 / 16.0
+        );
+    }
+
+    #[test]
+    fn wdp_header_is_an_evlr_header() {
+        let h = wdp_header(1234);
+        assert_eq!(h.len() as u64, WDP_HEADER_LEN);
+        assert_eq!(&h[2..11], b"LASF_Spec");
+        assert_eq!(u16::from_le_bytes([h[18], h[19]]), 65535);
+        assert_eq!(u64::from_le_bytes(h[20..28].try_into().unwrap()), 1234);
+    }
 }

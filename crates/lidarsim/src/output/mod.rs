@@ -1,16 +1,23 @@
 //! Where the points go.
 //!
 //! The simulator hands every detected echo, in pulse order, to one or more
-//! [`PointSink`]s: the LAS 1.4 writer ([`LasWriter`]), the text writer
-//! ([`XyzWriter`]) and an in-memory sink ([`MemorySink`]) for tests and
-//! library users. File sinks write under a temporary name
+//! [`PointSink`]s: the LAS 1.4 / LAZ writer ([`LasWriter`], with full
+//! waveforms in a `.wdp` file when asked), the PLY writer ([`PlyWriter`]),
+//! the text writer ([`XyzWriter`]) and an in-memory sink ([`MemorySink`])
+//! for tests and library users. [`crs`] knows the WKT of common EPSG codes. File sinks write under a temporary name
 //! (`NAME.partial`) and rename to the final name only when complete, so an
 //! interrupted or failed run never leaves a file that looks finished.
 
+pub mod crs;
 mod las;
+mod ply;
 mod xyz;
 
-pub use las::{LasSettings, LasWriter, POINT_FORMAT_6_LEN};
+pub use las::{
+    Digitizer, LasSettings, LasWriter, POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN, WAVEFORM_BITS,
+    WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN,
+};
+pub use ply::{PLY_PROPERTIES, PLY_RECORD_LEN, PlyWriter};
 pub use xyz::XyzWriter;
 
 use std::fs::File;
@@ -34,6 +41,9 @@ pub struct PointRecord {
     pub echo_width_ns: f64,
     /// Measured range from the sensor, m.
     pub range_m: f64,
+    /// Unit direction of the beam axis used to georeference the point
+    /// (`position = origin + beam_dir × range`), world frame.
+    pub beam_dir: DVec3,
     /// Georeferencing error: computed position minus where the central ray
     /// really met the echo range, m (zero without navigation errors).
     pub error_m: DVec3,
@@ -56,15 +66,70 @@ pub struct PointRecord {
     pub pulse_index: u64,
     /// Scene object that returned most of the echo's energy.
     pub object_id: u32,
+    /// Angle between the beam axis and the normal of the surface that
+    /// returned most of the echo's energy (the normal where the first sub-ray
+    /// of that surface in the echo met it), degrees, 0–90; `None` for
+    /// echoes from foliage (no surface) and receiver noise (files write NaN).
+    pub incidence_angle_deg: Option<f64>,
+    /// Two-way travel time of the echo's peak since emission, ps (the
+    /// detector's fitted position on the receiver's time axis, before any
+    /// range noise).
+    pub echo_time_ps: f64,
     /// What returned it: 0 a surface, 1 foliage, 2 a trunk (written to the
     /// LAS user data byte).
     pub component: u8,
+}
+
+/// The recorded waveforms of the pulses of one block that have echoes, in
+/// pulse order: what a full-waveform digitiser keeps of each pulse (the
+/// window of the record that holds signal).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct WaveformBlock {
+    /// One entry per pulse with at least one echo.
+    pub packets: Vec<WaveformPacket>,
+    /// The samples of all packets, one after the other, amplitude units.
+    pub samples: Vec<f32>,
+}
+
+/// Where one pulse's waveform lies in [`WaveformBlock::samples`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WaveformPacket {
+    /// Flight line number + 1 (the points' `point_source_id`).
+    pub point_source_id: u16,
+    /// Pulse index within the flight line (the points' `pulse_index`).
+    pub pulse_index: u64,
+    /// Two-way travel time of the first sample since emission, ps.
+    pub first_sample_ps: f64,
+    /// Index of the first sample in [`WaveformBlock::samples`].
+    pub start: usize,
+    /// Number of samples.
+    pub len: usize,
+}
+
+impl WaveformBlock {
+    /// Empties the block, keeping its allocations.
+    pub fn clear(&mut self) {
+        self.packets.clear();
+        self.samples.clear();
+    }
+
+    /// The samples of a packet.
+    pub fn samples_of(&self, packet: &WaveformPacket) -> &[f32] {
+        &self.samples[packet.start..packet.start + packet.len]
+    }
 }
 
 /// Receives the points of a survey in pulse order.
 pub trait PointSink: Send {
     /// Appends points.
     fn write(&mut self, points: &[PointRecord]) -> io::Result<()>;
+    /// Appends points together with the waveforms of their pulses (empty
+    /// unless the simulator was asked to record waveforms). Sinks that do
+    /// not store waveforms keep the default, which writes the points only.
+    fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
+        let _ = waveforms;
+        self.write(points)
+    }
     /// Completes the output (headers, renaming).
     fn finish(self: Box<Self>) -> io::Result<()>;
     /// Abandons the output, removing anything partial.
@@ -96,6 +161,7 @@ pub struct AtomicFile {
     writer: Option<BufWriter<File>>,
     partial: PathBuf,
     target: PathBuf,
+    committed: bool,
 }
 
 impl AtomicFile {
@@ -120,6 +186,7 @@ impl AtomicFile {
             writer: Some(BufWriter::with_capacity(1 << 20, file)),
             partial,
             target: target.to_path_buf(),
+            committed: false,
         })
     }
 
@@ -128,19 +195,34 @@ impl AtomicFile {
         self.writer.as_mut().expect("writer present until commit")
     }
 
+    /// Lends the buffered writer out (to a compressor that owns its output);
+    /// give it back with [`AtomicFile::put_writer`] before committing. The
+    /// partial file is still removed if `self` is dropped meanwhile.
+    pub fn take_writer(&mut self) -> BufWriter<File> {
+        self.writer.take().expect("writer present until commit")
+    }
+
+    /// Returns the writer lent by [`AtomicFile::take_writer`].
+    pub fn put_writer(&mut self, writer: BufWriter<File>) {
+        self.writer = Some(writer);
+    }
+
     /// Flushes, syncs and renames to the final name.
     pub fn commit(mut self) -> io::Result<()> {
         let w = self.writer.take().expect("writer present until commit");
         let file = w.into_inner().map_err(|e| e.into_error())?;
         file.sync_all()?;
         drop(file);
-        std::fs::rename(&self.partial, &self.target)
+        std::fs::rename(&self.partial, &self.target)?;
+        self.committed = true;
+        Ok(())
     }
 }
 
 impl Drop for AtomicFile {
     fn drop(&mut self) {
-        if self.writer.take().is_some() {
+        if !self.committed {
+            drop(self.writer.take());
             let _ = std::fs::remove_file(&self.partial);
         }
     }

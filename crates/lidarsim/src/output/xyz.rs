@@ -15,17 +15,19 @@ pub const XYZ_COLUMNS: &str = "x y z intensity return_number number_of_returns c
 #[derive(Debug)]
 pub struct XyzWriter {
     file: AtomicFile,
+    origin_m: [f64; 3],
     line: String,
 }
 
 impl XyzWriter {
     /// Creates `path` (as `path.partial` until finished) and writes the
-    /// header line.
-    pub fn create(path: &Path) -> io::Result<Self> {
+    /// header line; `origin_m` is added to every position.
+    pub fn create(path: &Path, origin_m: [f64; 3]) -> io::Result<Self> {
         let mut file = AtomicFile::create(path)?;
         writeln!(file.writer(), "{XYZ_COLUMNS}")?;
         Ok(Self {
             file,
+            origin_m,
             line: String::with_capacity(256),
         })
     }
@@ -34,15 +36,16 @@ impl XyzWriter {
 impl PointSink for XyzWriter {
     fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
         use std::fmt::Write as _;
+        let o = self.origin_m;
         for p in points {
             self.line.clear();
             // Formatting into a String cannot fail.
             let _ = writeln!(
                 self.line,
                 "{:.3} {:.3} {:.3} {} {} {} {} {:.9} {:.3} {} {:.6} {:.3} {:.4} {}",
-                p.position_m.x,
-                p.position_m.y,
-                p.position_m.z,
+                p.position_m.x + o[0],
+                p.position_m.y + o[1],
+                p.position_m.z + o[2],
                 p.intensity,
                 p.return_number,
                 p.number_of_returns,

@@ -115,9 +115,16 @@ pub struct ScannerSettings {
 /// Which files to write.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Formats {
-    /// `points.las`.
+    /// `points.las` (`"las"`, point format 6, or `"las-waveform"`).
     pub las: bool,
-    /// `points.xyz`.
+    /// `points.las` as point format 9 with the waveforms in `points.wdp`
+    /// (`"las-waveform"`; implies `las`).
+    pub las_waveform: bool,
+    /// `points.laz` (`"laz"`).
+    pub laz: bool,
+    /// `points.ply` (`"ply"`).
+    pub ply: bool,
+    /// `points.xyz` (`"xyz"`).
     pub xyz: bool,
 }
 
@@ -134,6 +141,15 @@ pub struct OutputSettings {
     pub gps_start_time_s: Option<f64>,
     /// LAS coordinate resolution, m.
     pub las_scale_m: f64,
+    /// Echo attributes as LAS extra bytes (`extra_bytes`, default on).
+    pub extra_bytes: bool,
+    /// OGC WKT of the coordinate reference system (`crs` or `crs_wkt`).
+    pub crs_wkt: Option<String>,
+    /// EPSG code when the CRS was given as `crs = "EPSG:code"`.
+    pub crs_epsg: Option<u32>,
+    /// Added to world coordinates in every output (points and
+    /// trajectories), m: `offset_m = [E, N, H]`.
+    pub offset_m: DVec3,
 }
 
 /// A validated survey with its scene.
@@ -1297,6 +1313,9 @@ impl Survey {
         let op = root.key("output");
         let mut formats = Formats {
             las: false,
+            las_waveform: false,
+            laz: false,
+            ply: false,
             xyz: false,
         };
         match &o.formats {
@@ -1304,14 +1323,90 @@ impl Survey {
             Some(list) => {
                 for (i, f) in list.iter().enumerate() {
                     match f.as_str() {
+                        "las" if formats.las_waveform => c.err(
+                            op.key("formats").index(i),
+                            "\"las\" and \"las-waveform\" both write points.las; keep one",
+                        ),
                         "las" => formats.las = true,
+                        "las-waveform" if formats.las && !formats.las_waveform => c.err(
+                            op.key("formats").index(i),
+                            "\"las\" and \"las-waveform\" both write points.las; keep one",
+                        ),
+                        "las-waveform" => {
+                            formats.las = true;
+                            formats.las_waveform = true;
+                        }
+                        "laz" => formats.laz = true,
+                        "ply" => formats.ply = true,
                         "xyz" => formats.xyz = true,
                         other => c.err(
                             op.key("formats").index(i),
-                            format!("unknown format '{other}'; expected \"las\" or \"xyz\""),
+                            format!(
+                                "unknown format '{other}'; expected \"las\", \"las-waveform\", \
+                                 \"laz\", \"ply\" or \"xyz\""
+                            ),
                         ),
                     }
                 }
+            }
+        }
+        let (crs_wkt, crs_epsg) = match (&o.crs, &o.crs_wkt) {
+            (Some(_), Some(_)) => {
+                c.err(
+                    op.key("crs_wkt"),
+                    "give the CRS once: `crs = \"EPSG:code\"` or `crs_wkt`, not both",
+                );
+                (None, None)
+            }
+            (Some(text), None) => match crate::output::crs::parse_epsg(text) {
+                None => {
+                    c.err(
+                        op.key("crs"),
+                        format!("must be \"EPSG:code\", got '{text}'"),
+                    );
+                    (None, None)
+                }
+                Some(code) => match crate::output::crs::wkt_for_epsg(code) {
+                    Some(wkt) => (Some(wkt), Some(code)),
+                    None => {
+                        c.err(
+                            op.key("crs"),
+                            format!(
+                                "EPSG:{code} is not in the built-in table (UTM zones on WGS 84 \
+                                 32601–32660/32701–32760, ETRS89 25828–25838, NAD83 \
+                                 26901–26923, ETRS-TM35FIN 3067); give its WKT with `crs_wkt` \
+                                 instead (e.g. from epsg.io or `projinfo EPSG:{code} -o WKT1_GDAL`)"
+                            ),
+                        );
+                        (None, None)
+                    }
+                },
+            },
+            (None, Some(wkt)) => match crate::output::crs::check_wkt(wkt) {
+                Ok(()) => (Some(wkt.trim().to_string()), None),
+                Err(m) => {
+                    c.err(op.key("crs_wkt"), m);
+                    (None, None)
+                }
+            },
+            (None, None) => (None, None),
+        };
+        let offset_m = match &o.offset_m {
+            None => DVec3::ZERO,
+            Some(v) => c
+                .point(op.key("offset_m"), &Some(v.clone()))
+                .unwrap_or(DVec3::ZERO),
+        };
+        if formats.las_waveform {
+            let bin_ps = raw.receiver.bin_ps.unwrap_or(500.0);
+            if bin_ps.fract() != 0.0 || bin_ps > f64::from(u32::MAX) {
+                c.err(
+                    root.key("receiver").key("bin_ps"),
+                    format!(
+                        "must be a whole number of picoseconds for \"las-waveform\" output (the \
+                         LAS waveform descriptor stores the sample spacing in whole ps), got {bin_ps}"
+                    ),
+                );
             }
         }
         let trajectory_interval_s = c.positive(
@@ -1727,6 +1822,10 @@ impl Survey {
                 trajectory_interval_s,
                 gps_start_time_s,
                 las_scale_m,
+                extra_bytes: o.extra_bytes.unwrap_or(true),
+                crs_wkt,
+                crs_epsg,
+                offset_m,
             },
             scene,
             raw,

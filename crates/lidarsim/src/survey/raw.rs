@@ -181,6 +181,14 @@ pub struct RawOutput {
     pub gps_start_time_s: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub las_scale_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extra_bytes: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crs: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub crs_wkt: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_m: Option<Vec<f64>>,
 }
 
 /// `[materials.NAME]`.

@@ -1,0 +1,152 @@
+//! PLY point output, `binary_little_endian 1.0` (the PLY format of Turk,
+//! 1994, as CloudCompare, MeshLab, Open3D and plyfile read it): one
+//! `vertex` element per point with double-precision coordinates (projected
+//! coordinates need more than a float's 7 digits) and the point's
+//! attributes.
+//!
+//! The vertex count is known only at the end, so the header is written with
+//! the count line padded by a comment line of fixed total length and
+//! rewritten in place when the file is finished.
+
+use std::io::{self, Seek, SeekFrom, Write};
+use std::path::Path;
+
+use super::{AtomicFile, PointRecord, PointSink};
+
+/// The vertex properties in record order: (PLY type, name).
+pub const PLY_PROPERTIES: [(&str, &str); 16] = [
+    ("double", "x"),
+    ("double", "y"),
+    ("double", "z"),
+    ("double", "gps_time"),
+    ("ushort", "intensity"),
+    ("uchar", "return_number"),
+    ("uchar", "number_of_returns"),
+    ("uchar", "classification"),
+    ("uchar", "component"),
+    ("ushort", "point_source_id"),
+    ("float", "scan_angle"),
+    ("float", "amplitude"),
+    ("float", "echo_width"),
+    ("float", "range"),
+    ("float", "incidence_angle"),
+    ("uint", "object_id"),
+];
+
+/// Bytes of one vertex record.
+pub const PLY_RECORD_LEN: usize = 8 * 4 + 2 + 4 + 2 + 4 * 5 + 4;
+
+/// Width reserved for the vertex count and its padding comment, bytes.
+const COUNT_FIELD: usize = 20;
+
+/// Writes `points.ply`.
+#[derive(Debug)]
+pub struct PlyWriter {
+    file: AtomicFile,
+    origin_m: [f64; 3],
+    count: u64,
+    buf: Vec<u8>,
+}
+
+impl PlyWriter {
+    /// Creates `path` (as `path.partial` until finished); `origin_m` is
+    /// added to every position.
+    pub fn create(path: &Path, origin_m: [f64; 3]) -> io::Result<Self> {
+        let mut file = AtomicFile::create(path)?;
+        file.writer().write_all(&header(0))?;
+        Ok(Self {
+            file,
+            origin_m,
+            count: 0,
+            buf: Vec::with_capacity(1 << 16),
+        })
+    }
+}
+
+/// The header for `count` vertices; always the same length.
+fn header(count: u64) -> Vec<u8> {
+    let digits = count.to_string();
+    // The padding comment absorbs what the count does not use, so the
+    // header length does not depend on the count.
+    let pad = " ".repeat(COUNT_FIELD - digits.len());
+    let mut h = String::from("ply\nformat binary_little_endian 1.0\n");
+    h.push_str("comment lidarsim point cloud: one vertex per echo\n");
+    h.push_str(&format!("comment padding{pad}\n"));
+    h.push_str(&format!("element vertex {digits}\n"));
+    for (ty, name) in PLY_PROPERTIES {
+        h.push_str(&format!("property {ty} {name}\n"));
+    }
+    h.push_str("end_header\n");
+    h.into_bytes()
+}
+
+impl PointSink for PlyWriter {
+    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+        self.buf.clear();
+        let o = self.origin_m;
+        for p in points {
+            for v in [
+                p.position_m.x + o[0],
+                p.position_m.y + o[1],
+                p.position_m.z + o[2],
+                p.gps_time_s,
+            ] {
+                self.buf.extend_from_slice(&v.to_le_bytes());
+            }
+            self.buf.extend_from_slice(&p.intensity.to_le_bytes());
+            self.buf.extend_from_slice(&[
+                p.return_number,
+                p.number_of_returns,
+                p.classification,
+                p.component,
+            ]);
+            self.buf.extend_from_slice(&p.point_source_id.to_le_bytes());
+            for v in [
+                p.scan_angle_deg,
+                p.amplitude,
+                p.echo_width_ns,
+                p.range_m,
+                p.incidence_angle_deg.unwrap_or(f64::NAN),
+            ] {
+                self.buf.extend_from_slice(&(v as f32).to_le_bytes());
+            }
+            self.buf.extend_from_slice(&p.object_id.to_le_bytes());
+            self.count += 1;
+        }
+        self.file.writer().write_all(&self.buf)
+    }
+
+    fn finish(mut self: Box<Self>) -> io::Result<()> {
+        let h = header(self.count);
+        let w = self.file.writer();
+        w.flush()?;
+        w.seek(SeekFrom::Start(0))?;
+        w.write_all(&h)?;
+        self.file.commit()
+    }
+
+    fn discard(self: Box<Self>) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_length_does_not_depend_on_the_count() {
+        assert_eq!(header(0).len(), header(u64::MAX).len());
+        let text = String::from_utf8(header(12345)).unwrap();
+        assert!(text.contains("\nelement vertex 12345\n"));
+        assert!(text.ends_with("end_header\n"));
+        // Record length from the PLY type sizes.
+        let size = |t: &str| match t {
+            "double" => 8,
+            "float" | "uint" => 4,
+            "ushort" => 2,
+            "uchar" => 1,
+            _ => unreachable!(),
+        };
+        let total: usize = PLY_PROPERTIES.iter().map(|(t, _)| size(t)).sum();
+        assert_eq!(total, PLY_RECORD_LEN);
+    }
+}
