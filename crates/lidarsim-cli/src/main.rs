@@ -7,6 +7,7 @@
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -50,19 +51,25 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         export_survey: Option<PathBuf>,
     },
-    /// Simulate a survey file.
+    /// Simulate a survey file (Ctrl-C stops at the next block of pulses
+    /// with valid files; `--resume DIR` continues such a run).
     Run {
         /// The survey (TOML).
-        survey: PathBuf,
+        #[arg(required_unless_present = "resume")]
+        survey: Option<PathBuf>,
         /// Output directory.
-        #[arg(short, long, default_value = "out")]
+        #[arg(short, long, default_value = "out", conflicts_with = "resume")]
         output: PathBuf,
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
         /// Seed of all random streams (overrides the file's).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "resume")]
         seed: Option<u64>,
+        /// Continue the interrupted run in DIR (with its survey.toml) up to
+        /// the files an uninterrupted run would have written.
+        #[arg(long, value_name = "DIR", conflicts_with = "survey")]
+        resume: Option<PathBuf>,
     },
     /// Validate a survey file and print what it will give, without simulating.
     Check {
@@ -105,8 +112,27 @@ enum Command {
     },
 }
 
+/// Set by the first Ctrl-C (SIGINT) or SIGTERM: the run stops at the next
+/// block of pulses and finishes its files.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Exit status of a run stopped by a signal (128 + SIGINT).
+const INTERRUPTED: u8 = 130;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // A second signal while the files are being finished ends the program
+    // at once (leaving only `.partial` files behind).
+    let handler = ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            eprintln!("\nstopped without finishing the files");
+            std::process::exit(i32::from(INTERRUPTED));
+        }
+        eprintln!("\ninterrupted: finishing the files for the pulses simulated so far…");
+    });
+    if let Err(e) = handler {
+        eprintln!("warning: Ctrl-C will not stop runs cleanly: {e}");
+    }
     match cli.command {
         Command::Demo {
             output,
@@ -138,17 +164,35 @@ fn main() -> ExitCode {
                     return fail(1, &list.join("\n"));
                 }
             };
-            simulate(survey, &output, threads)
+            simulate(survey, &output, threads, false)
         }
         Command::Run {
             survey,
             output,
             threads,
             seed,
-        } => match Survey::load_with_seed(&survey, seed) {
-            Ok(s) => simulate(s, &output, threads),
-            Err(e) => fail_survey(&e),
-        },
+            resume,
+        } => {
+            let (path, output, resuming) = match (resume, survey) {
+                (Some(dir), _) => (dir.join("survey.toml"), dir, true),
+                (None, Some(survey)) => (survey, output, false),
+                (None, None) => return fail(2, "give a survey file or --resume DIR"),
+            };
+            if resuming && !path.exists() {
+                return fail(
+                    2,
+                    &format!(
+                        "{}: no such file: {} does not hold a run to resume",
+                        path.display(),
+                        output.display()
+                    ),
+                );
+            }
+            match Survey::load_with_seed(&path, seed) {
+                Ok(s) => simulate(s, &output, threads, resuming),
+                Err(e) => fail_survey(&e),
+            }
+        }
         Command::Render {
             cloud,
             output,
@@ -207,7 +251,7 @@ fn warn(survey: &Survey) {
     }
 }
 
-fn simulate(survey: Survey, output: &Path, threads: Option<usize>) -> ExitCode {
+fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool) -> ExitCode {
     warn(&survey);
     let threads = match threads {
         Some(0) => return fail(2, "--threads must be at least 1"),
@@ -233,10 +277,25 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>) -> ExitCode {
         &RunOptions {
             threads,
             progress: &progress,
+            stop: Some(&STOP),
+            resume,
         },
     );
     bar.finish_and_clear();
     match result {
+        Ok(summary) if !summary.complete => {
+            let next = summary.next_pulse.unwrap_or_default();
+            eprintln!(
+                "interrupted after {} pulses: the files in {} hold them and are valid; \
+                 summary.json says \"complete\": false, next pulse {} of line {}",
+                summary.pulses,
+                output.display(),
+                next.pulse,
+                next.line + 1
+            );
+            eprintln!("continue with: lidarsim run --resume {}", output.display());
+            ExitCode::from(INTERRUPTED)
+        }
         Ok(summary) => {
             report(&summary, output);
             ExitCode::SUCCESS

@@ -23,9 +23,18 @@ impl XyzWriter {
     /// header line.
     pub fn create(path: &Path) -> io::Result<Self> {
         let mut file = AtomicFile::create(path)?;
-        writeln!(file.writer(), "{XYZ_COLUMNS}")?;
+        writeln!(file.writer(), "{XYZ_COLUMNS}").map_err(|e| file.error(e))?;
         Ok(Self {
             file,
+            line: String::with_capacity(256),
+        })
+    }
+
+    /// Continues `path`, finished early by an interrupted run when it held
+    /// `len` bytes: points are appended after them.
+    pub fn resume(path: &Path, len: u64) -> io::Result<Self> {
+        Ok(Self {
+            file: AtomicFile::reopen(path, len)?,
             line: String::with_capacity(256),
         })
     }
@@ -55,7 +64,9 @@ impl PointSink for XyzWriter {
                 p.range_m,
                 p.component
             );
-            self.file.writer().write_all(self.line.as_bytes())?;
+            if let Err(e) = self.file.writer().write_all(self.line.as_bytes()) {
+                return Err(self.file.error(e));
+            }
         }
         Ok(())
     }
