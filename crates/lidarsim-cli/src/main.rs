@@ -234,8 +234,14 @@ fn fail(code: u8, message: &str) -> ExitCode {
 
 /// Reports every problem of a survey file, exit status 2.
 fn fail_survey(e: &lidarsim::survey::SurveyError) -> ExitCode {
-    for d in &e.diagnostics {
+    for (i, d) in e.diagnostics.iter().enumerate() {
+        if i > 0 {
+            eprintln!();
+        }
         eprintln!("error: {d}");
+    }
+    if e.diagnostics.len() > 1 {
+        eprintln!("\n{} problems found", e.diagnostics.len());
     }
     ExitCode::from(2)
 }
