@@ -16,6 +16,13 @@ use lidarsim::accel::Bvh;
 use lidarsim::plan::plan;
 use lidarsim::run::{RunOptions, Summary, run_to_dir};
 
+/// Prints a line to standard error, ignoring a closed pipe (`2>&1 | head`).
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
 /// Prints a line to standard output, ignoring a closed pipe (`| head`).
 macro_rules! say {
     ($($arg:tt)*) => {{
@@ -125,13 +132,13 @@ fn main() -> ExitCode {
     // at once (leaving only `.partial` files behind).
     let handler = ctrlc::set_handler(|| {
         if STOP.swap(true, Ordering::SeqCst) {
-            eprintln!("\nstopped without finishing the files");
+            note!("\nstopped without finishing the files");
             std::process::exit(i32::from(INTERRUPTED));
         }
-        eprintln!("\ninterrupted: finishing the files for the pulses simulated so far…");
+        note!("\ninterrupted: finishing the files for the pulses simulated so far…");
     });
     if let Err(e) = handler {
-        eprintln!("warning: Ctrl-C will not stop runs cleanly: {e}");
+        note!("warning: Ctrl-C will not stop runs cleanly: {e}");
     }
     match cli.command {
         Command::Demo {
@@ -152,7 +159,7 @@ fn main() -> ExitCode {
                 if let Err(e) = lidarsim::output::write_atomic(&path, text.as_bytes()) {
                     return fail(1, &format!("{}: {e}", path.display()));
                 }
-                eprintln!("wrote the demo survey to {}", path.display());
+                note!("wrote the demo survey to {}", path.display());
             }
             let survey = match Survey::from_raw(raw, None) {
                 Ok(s) => s,
@@ -228,7 +235,7 @@ fn main() -> ExitCode {
 }
 
 fn fail(code: u8, message: &str) -> ExitCode {
-    eprintln!("error: {message}");
+    note!("error: {message}");
     ExitCode::from(code)
 }
 
@@ -236,12 +243,12 @@ fn fail(code: u8, message: &str) -> ExitCode {
 fn fail_survey(e: &lidarsim::survey::SurveyError) -> ExitCode {
     for (i, d) in e.diagnostics.iter().enumerate() {
         if i > 0 {
-            eprintln!();
+            note!("");
         }
-        eprintln!("error: {d}");
+        note!("error: {d}");
     }
     if e.diagnostics.len() > 1 {
-        eprintln!("\n{} problems found", e.diagnostics.len());
+        note!("\n{} problems found", e.diagnostics.len());
     }
     ExitCode::from(2)
 }
@@ -253,7 +260,7 @@ fn warn(survey: &Survey) {
         .as_ref()
         .map_or_else(|| "<demo>".to_string(), |p| p.display().to_string());
     for w in &survey.warnings {
-        eprintln!("warning: {file}: {w}");
+        note!("warning: {file}: {w}");
     }
 }
 
@@ -291,7 +298,7 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
     match result {
         Ok(summary) if !summary.complete => {
             let next = summary.next_pulse.unwrap_or_default();
-            eprintln!(
+            note!(
                 "interrupted after {} pulses: the files in {} hold them and are valid; \
                  summary.json says \"complete\": false, next pulse {} of line {}",
                 summary.pulses,
@@ -299,7 +306,7 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
                 next.pulse,
                 next.line + 1
             );
-            eprintln!("continue with: lidarsim run --resume {}", output.display());
+            note!("continue with: lidarsim run --resume {}", output.display());
             ExitCode::from(INTERRUPTED)
         }
         Ok(summary) => {
@@ -402,7 +409,7 @@ fn render(
     resolution: Option<f64>,
     profile: Option<&str>,
 ) -> Result<(), (u8, String)> {
-    use lidarsim::render::{ColorBy, RenderPoint};
+    use lidarsim::render::ColorBy;
     let by = ColorBy::from_name(color).ok_or_else(|| {
         (
             2,
@@ -434,9 +441,52 @@ fn render(
             Some(v)
         }
     };
-    let bad = |e: las::Error| (1, format!("{}: {e}", cloud.display()));
+    let points = read_cloud(cloud).map_err(|e| (1, e))?;
+    let img = match section {
+        None => lidarsim::render::top_view(&points, by, resolution),
+        Some(v) => {
+            lidarsim::render::profile(&points, (v[0], v[1]), (v[2], v[3]), v[4], by, resolution)
+        }
+    };
+    img.save_png(output)
+        .map_err(|e| (1, format!("{}: {e}", output.display())))
+}
+
+/// Reads every point of a LAS file for rendering. Errors name the file and
+/// say what is wrong in words (a truncated file, a header that promises
+/// more points than the file holds) before any large allocation.
+fn read_cloud(cloud: &Path) -> Result<Vec<lidarsim::render::RenderPoint>, String> {
+    use lidarsim::render::RenderPoint;
+    let bad = |e: las::Error| {
+        let why = match &e {
+            las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+                "the file ends early: it is truncated or not a LAS file".to_string()
+            }
+            las::Error::Io(io) if io.kind() == std::io::ErrorKind::InvalidInput => {
+                "its header points outside the file (point count or offsets too large)".to_string()
+            }
+            _ => e.to_string(),
+        };
+        format!("{}: {why}", cloud.display())
+    };
+    let size = std::fs::metadata(cloud)
+        .map_err(|e| format!("{}: {e}", cloud.display()))?
+        .len();
     let mut reader = las::Reader::from_path(cloud).map_err(bad)?;
-    let points: Vec<RenderPoint> = reader
+    let header = reader.header();
+    let count = header.number_of_points();
+    let record = u64::from(header.point_format().len());
+    match count.checked_mul(record) {
+        Some(bytes) if bytes <= size => {}
+        _ => {
+            return Err(format!(
+                "{}: the header counts {count} points of {record} bytes, more than the file's \
+                 {size} bytes hold: it is truncated or its header is wrong",
+                cloud.display()
+            ));
+        }
+    }
+    reader
         .read_all()
         .map_err(bad)?
         .points()
@@ -453,15 +503,7 @@ fn render(
             })
         })
         .collect::<Result<_, _>>()
-        .map_err(bad)?;
-    let img = match section {
-        None => lidarsim::render::top_view(&points, by, resolution),
-        Some(v) => {
-            lidarsim::render::profile(&points, (v[0], v[1]), (v[2], v[3]), v[4], by, resolution)
-        }
-    };
-    img.save_png(output)
-        .map_err(|e| (1, format!("{}: {e}", output.display())))
+        .map_err(bad)
 }
 
 fn report(s: &Summary, output: &Path) {

@@ -30,6 +30,13 @@ use crate::scene::{
 };
 use crate::waveform::{PulseShape, ReceiverConfig};
 
+/// Highest pulse repetition frequency accepted, Hz.
+pub const MAX_PRF_HZ: f64 = 1e7;
+
+/// Longest flight line accepted, hours (no airborne line lasts a day; the
+/// limit keeps pulse counts and per-line error series finite).
+pub const MAX_LINE_HOURS: f64 = 24.0;
+
 /// Seed used when the survey names none.
 pub const DEFAULT_SEED: u64 = 1;
 
@@ -254,6 +261,13 @@ fn explain(message: &str) -> (String, Option<String>) {
     }
     if let Some(at) = m.find("expected struct Raw") {
         m.replace_range(at.., "expected a table");
+    }
+    if let Some(rest) = m.strip_prefix("invalid type: integer `")
+        && let Some((n, _)) = rest.split_once("` as i128")
+    {
+        m = format!(
+            "integer {n} is too large: TOML integers are 64-bit (up to 9223372036854775807)"
+        );
     }
     if m.contains("did not match any variant of untagged enum NumberOrList") {
         m = "expected a number or an array of numbers".to_string();
@@ -1200,6 +1214,15 @@ impl Survey {
         let s = &raw.scanner;
         let sp = root.key("scanner");
         let prf_hz = c.positive(sp.key("prf_hz"), s.prf_hz, 100_000.0, " Hz");
+        if prf_hz > MAX_PRF_HZ {
+            c.err(
+                sp.key("prf_hz"),
+                format!(
+                    "must be at most {MAX_PRF_HZ} Hz (10 MHz, beyond any airborne scanner), \
+                     got {prf_hz:e}"
+                ),
+            );
+        }
         let scan_frequency_hz = c.positive(
             sp.key("scan_frequency_hz"),
             s.scan_frequency_hz,
@@ -1404,6 +1427,17 @@ impl Survey {
                 c.err(
                     lp.key("end_m"),
                     "must differ from start_m: the line has no length",
+                );
+                continue;
+            }
+            let hours = (end - start).length() / speed / 3600.0;
+            if hours > MAX_LINE_HOURS {
+                c.err(
+                    lp.key("end_m"),
+                    format!(
+                        "the line would take {hours:.3e} h at {speed} m/s; a flight line may \
+                         take at most {MAX_LINE_HOURS} h"
+                    ),
                 );
                 continue;
             }
@@ -1774,6 +1808,19 @@ impl Survey {
         let mut lines = Vec::new();
         let mut t = 0.0;
         for (start, end, speed) in straight {
+            let hours = (end - start).length() / speed / 3600.0;
+            if !(hours <= MAX_LINE_HOURS) {
+                // Only generated lines get here: [[flight_line]] entries
+                // were checked above.
+                c.err(
+                    root.key("plan"),
+                    format!(
+                        "a generated line would take {hours:.3e} h; a flight line may take at \
+                         most {MAX_LINE_HOURS} h"
+                    ),
+                );
+                break;
+            }
             let index = lines.len() as u32;
             let line = FlightLine {
                 index,
@@ -1794,6 +1841,18 @@ impl Survey {
             let index = lines.len() as u32;
             let (start_m, end_m) = track.ends();
             let duration = track.duration_s();
+            if !(duration / 3600.0 <= MAX_LINE_HOURS) || !start_time_s.is_finite() {
+                c.err(
+                    pp.key("trajectory_file"),
+                    format!(
+                        "line {} of the trajectory lasts {:.3e} h; a flight line may take at \
+                         most {MAX_LINE_HOURS} h",
+                        index + 1,
+                        duration / 3600.0
+                    ),
+                );
+                break;
+            }
             lines.push(FlightLine {
                 index,
                 start_m,
