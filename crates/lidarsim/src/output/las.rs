@@ -143,10 +143,13 @@ impl LasWriter {
                 "its record layout, scale or offset differ from the survey's".into(),
             ));
         }
-        let expected = offset_to_points + w.count * u64::from(w.record_len());
-        if expected != len {
+        let expected = w
+            .count
+            .checked_mul(u64::from(w.record_len()))
+            .and_then(|b| b.checked_add(offset_to_points));
+        if expected != Some(len) {
             return Err(bad(format!(
-                "its header counts {} points ({expected} bytes) but {len} bytes were recorded",
+                "its header counts {} points but {len} bytes were recorded",
                 w.count
             )));
         }
@@ -154,8 +157,8 @@ impl LasWriter {
             for a in 0..3 {
                 // Header bounds are integers × scale + offset: exact inverse.
                 let (max, min) = (f64_at(179 + 16 * a), f64_at(187 + 16 * a));
-                w.max[a] = w.quantize(max, a)?;
-                w.min[a] = w.quantize(min, a)?;
+                w.max[a] = w.quantize(max, a).map_err(|e| bad(e.to_string()))?;
+                w.min[a] = w.quantize(min, a).map_err(|e| bad(e.to_string()))?;
             }
         }
         // Only now, with everything checked, is the file touched.
