@@ -212,7 +212,10 @@ pub fn run_to_dir(
     let prev = if options.resume {
         Some(read_interrupted(survey, out_dir)?)
     } else {
-        std::fs::create_dir_all(out_dir).map_err(io_err(out_dir))?;
+        std::fs::create_dir_all(out_dir).map_err(|e| RunError {
+            path: out_dir.to_path_buf(),
+            source: io::Error::new(e.kind(), format!("cannot create the output directory: {e}")),
+        })?;
         // A summary, report or state of an earlier run must not describe
         // this one.
         for path in [&summary_path, &state_path, &out_dir.join("report.html")] {
