@@ -253,12 +253,17 @@ fn fail_survey(e: &lidarsim::survey::SurveyError) -> ExitCode {
     ExitCode::from(2)
 }
 
-/// Prints the survey's warnings to standard error.
-fn warn(survey: &Survey) {
-    let file = survey
+/// The survey's file name for messages (`<demo>` for the built-in one).
+fn source_name(survey: &Survey) -> String {
+    survey
         .source
         .as_ref()
-        .map_or_else(|| "<demo>".to_string(), |p| p.display().to_string());
+        .map_or_else(|| "<demo>".to_string(), |p| p.display().to_string())
+}
+
+/// Prints the survey's warnings to standard error.
+fn warn(survey: &Survey) {
+    let file = source_name(survey);
     for w in &survey.warnings {
         note!("warning: {file}: {w}");
     }
@@ -292,6 +297,9 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
             progress: &progress,
             stop: Some(&STOP),
             resume,
+            on_warning: Some(&|w: &str| {
+                bar.suspend(|| note!("warning: {}: {w}", source_name(&survey)));
+            }),
         },
     );
     bar.finish_and_clear();
@@ -529,6 +537,9 @@ fn report(s: &Summary, output: &Path) {
 fn check(survey: &Survey) {
     let bvh = Bvh::build(survey.scene.clone());
     let p = plan(survey, &bvh);
+    for w in lidarsim::plan::warnings(survey, &bvh, &p) {
+        note!("warning: {}: {w}", source_name(survey));
+    }
     say!(
         "survey OK: {} flight line(s), {} scene primitives, seed {}",
         survey.lines.len(),

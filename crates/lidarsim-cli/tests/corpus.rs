@@ -154,6 +154,7 @@ fn broken_surveys() {
             &[
                 "impossible.toml:2:18",
                 "`scanner.scan_angle_deg`: must be between 0 and 89°, got 95",
+                "above the horizon",
                 "impossible.toml:6:9",
                 "the line has no length",
                 "impossible.toml:7:13",

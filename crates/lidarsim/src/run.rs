@@ -42,6 +42,9 @@ pub struct RunOptions<'a> {
     /// starting afresh (the survey must be the one it ran: its
     /// `survey.toml`).
     pub resume: bool,
+    /// Called, before simulating, with each warning about the survey over
+    /// its scene ([`crate::plan::warnings`]; they also go into the summary).
+    pub on_warning: Option<&'a (dyn Fn(&str) + Sync)>,
 }
 
 impl<'a> RunOptions<'a> {
@@ -52,6 +55,7 @@ impl<'a> RunOptions<'a> {
             progress,
             stop: None,
             resume: false,
+            on_warning: None,
         }
     }
 }
@@ -231,6 +235,12 @@ pub fn run_to_dir(
     let bvh = Bvh::build(survey.scene.clone());
     let index_time_s = index_timer.seconds();
     let plan = plan(survey, &bvh);
+    let scene_warnings = crate::plan::warnings(survey, &bvh, &plan);
+    if let Some(warn) = options.on_warning {
+        for w in &scene_warnings {
+            warn(w);
+        }
+    }
 
     let mut files = Vec::new();
     let mut sinks: Vec<Box<dyn PointSink>> = Vec::new();
@@ -366,6 +376,7 @@ pub fn run_to_dir(
             files,
             bvh.scene().primitives.len(),
         );
+        summary.warnings.extend(scene_warnings);
         summary.complete = false;
         summary.next_pulse = Some(next);
         summary.point_file_bytes = Some(bytes);
@@ -387,6 +398,8 @@ pub fn run_to_dir(
         files,
         bvh.scene().primitives.len(),
     );
+    let mut summary = summary;
+    summary.warnings.extend(scene_warnings);
     // The report, with the waveforms of a pulse with the most echoes and of
     // a single-echo pulse, simulated again.
     let mut waveforms = Vec::new();

@@ -1229,9 +1229,22 @@ impl Survey {
             50.0,
             " Hz",
         );
+        let scan_angle_given = match s.scan_angle_deg {
+            Some(a) if a >= 90.0 => {
+                c.err(
+                    sp.key("scan_angle_deg"),
+                    format!(
+                        "must be between 0 and 89°, got {a}: at 90° or more from nadir the beam \
+                         points at or above the horizon and meets no ground"
+                    ),
+                );
+                None
+            }
+            other => other,
+        };
         let scan_angle_deg = c.number(
             sp.key("scan_angle_deg"),
-            s.scan_angle_deg,
+            scan_angle_given,
             20.0,
             0.0,
             false,
@@ -1809,7 +1822,7 @@ impl Survey {
         let mut t = 0.0;
         for (start, end, speed) in straight {
             let hours = (end - start).length() / speed / 3600.0;
-            if !(hours <= MAX_LINE_HOURS) {
+            if hours.is_nan() || hours > MAX_LINE_HOURS {
                 // Only generated lines get here: [[flight_line]] entries
                 // were checked above.
                 c.err(
@@ -1841,7 +1854,8 @@ impl Survey {
             let index = lines.len() as u32;
             let (start_m, end_m) = track.ends();
             let duration = track.duration_s();
-            if !(duration / 3600.0 <= MAX_LINE_HOURS) || !start_time_s.is_finite() {
+            let hours = duration / 3600.0;
+            if hours.is_nan() || hours > MAX_LINE_HOURS || !start_time_s.is_finite() {
                 c.err(
                     pp.key("trajectory_file"),
                     format!(
