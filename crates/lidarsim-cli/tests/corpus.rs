@@ -47,7 +47,7 @@ fn reject_survey(what: &str, survey: &Path, expect: &[&str], seen: &mut Vec<(Str
         2,
         expect,
     );
-    let out = temp("out");
+    let out = temp(&format!("out-{}", what.replace('/', "-")));
     let o = lidarsim(&[
         "run".as_ref(),
         survey.as_os_str(),
