@@ -510,8 +510,22 @@ fn read_cloud(cloud: &Path) -> Result<Vec<lidarsim::render::RenderPoint>, String
                 source: p.point_source_id,
             })
         })
-        .collect::<Result<_, _>>()
+        .collect::<Result<Vec<RenderPoint>, _>>()
         .map_err(bad)
+        .and_then(|points| {
+            match points
+                .iter()
+                .position(|p| !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()))
+            {
+                Some(i) => Err(format!(
+                    "{}: point {} has a coordinate that is not a finite number (check the \
+                     header's scale and offset)",
+                    cloud.display(),
+                    i + 1
+                )),
+                None => Ok(points),
+            }
+        })
 }
 
 fn report(s: &Summary, output: &Path) {

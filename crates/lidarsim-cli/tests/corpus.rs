@@ -300,8 +300,12 @@ fn broken_trajectories() {
 
 #[test]
 fn broken_las_files_for_render() {
-    let cases: [(&str, &str); 9] = [
+    let cases: [(&str, &str); 10] = [
         ("empty.las", "the file ends early"),
+        (
+            "scale_nan.las",
+            "point 1 has a coordinate that is not a finite number",
+        ),
         ("truncated_header.las", "the file ends early"),
         (
             "truncated_points.las",

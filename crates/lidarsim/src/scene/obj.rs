@@ -290,7 +290,13 @@ pub fn load_obj(
     for model in &models {
         let mesh = &model.mesh;
         let (material, class_hint) = match mesh.material_id {
-            Some(id) => resolved[id],
+            Some(id) => *resolved.get(id).ok_or_else(|| MeshError::Parse {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "object '{}' uses a material that was not loaded",
+                    model.name
+                ),
+            })?,
             None => match default_material {
                 Some(m) => (m, None),
                 None if mesh.indices.is_empty() => continue,
