@@ -72,7 +72,15 @@ fn print(seen: &[(String, String)]) {
 #[test]
 fn broken_surveys() {
     // (file, fragments of the message: place, key, reason)
-    let cases: [(&str, &[&str]); 11] = [
+    let cases: [(&str, &[&str]); 12] = [
+        (
+            "far_coordinates.toml",
+            &[
+                "far_coordinates.toml:12:15",
+                "`polygon[0].vertices_m[0]`: coordinates must lie within ±1e8 m",
+                "4 problems found",
+            ],
+        ),
         (
             "syntax_error.toml",
             &["syntax_error.toml:1:9", "unclosed table", "1 | [scanner"],

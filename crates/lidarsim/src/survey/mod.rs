@@ -37,6 +37,10 @@ pub const MAX_PRF_HZ: f64 = 1e7;
 /// limit keeps pulse counts and per-line error series finite).
 pub const MAX_LINE_HOURS: f64 = 24.0;
 
+/// Largest coordinate magnitude accepted, m (beyond any projected
+/// coordinate system; the BVH keeps f32 boxes relative to the scene).
+pub const MAX_COORDINATE_M: f64 = 1e8;
+
 /// Seed used when the survey names none.
 pub const DEFAULT_SEED: u64 = 1;
 
@@ -409,6 +413,13 @@ impl Checker {
             }
             Some(v) if v.iter().any(|x| !x.is_finite()) => {
                 self.err(path, "must hold finite numbers");
+                None
+            }
+            Some(v) if v.iter().any(|x| x.abs() > MAX_COORDINATE_M) => {
+                self.err(
+                    path,
+                    format!("coordinates must lie within ±{MAX_COORDINATE_M:e} m, got {v:?}"),
+                );
                 None
             }
             Some(v) => Some(DVec3::new(v[0], v[1], v[2])),
@@ -1880,6 +1891,36 @@ impl Survey {
             });
         }
 
+        // Polygons, meshes (after placement) and trees far beyond any
+        // projected coordinate system cannot be traced in the BVH's f32
+        // boxes; say so instead of simulating a scene no pulse can hit.
+        let bounds = scene.bounds();
+        if !bounds.is_empty() {
+            let far = bounds.min.abs().max(bounds.max.abs()).max_element();
+            if far > MAX_COORDINATE_M {
+                let key = raw
+                    .polygons
+                    .iter()
+                    .position(|p| {
+                        p.vertices_m
+                            .iter()
+                            .flatten()
+                            .flatten()
+                            .any(|x| x.abs() > MAX_COORDINATE_M)
+                    })
+                    .map_or_else(KeyPath::root, |i| {
+                        root.key("polygon").index(i).key("vertices_m")
+                    });
+                c.err(
+                    key,
+                    format!(
+                        "the scene reaches {far:e} m from the origin: coordinates must lie \
+                         within ±{MAX_COORDINATE_M:e} m (shift them, e.g. by a mesh's \
+                         offset_m)"
+                    ),
+                );
+            }
+        }
         if scene.primitives.is_empty() && c.problems.is_empty() {
             c.err(
                 root,
