@@ -297,6 +297,7 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
             progress: &progress,
             stop: Some(&STOP),
             resume,
+            pulse_budget: None,
             on_warning: Some(&|w: &str| {
                 bar.suspend(|| note!("warning: {}: {w}", source_name(&survey)));
             }),

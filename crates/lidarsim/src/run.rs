@@ -42,6 +42,9 @@ pub struct RunOptions<'a> {
     /// starting afresh (the survey must be the one it ran: its
     /// `survey.toml`).
     pub resume: bool,
+    /// Stop (as if interrupted) once this many pulses were simulated in
+    /// this call, rounded up to a whole block of 2048: long runs in slices.
+    pub pulse_budget: Option<u64>,
     /// Called, before simulating, with each warning about the survey over
     /// its scene ([`crate::plan::warnings`]; they also go into the summary).
     pub on_warning: Option<&'a (dyn Fn(&str) + Sync)>,
@@ -55,6 +58,7 @@ impl<'a> RunOptions<'a> {
             progress,
             stop: None,
             resume: false,
+            pulse_budget: None,
             on_warning: None,
         }
     }
@@ -331,6 +335,7 @@ pub fn run_to_dir(
     let control = RunControl {
         start,
         stop: options.stop,
+        pulse_budget: options.pulse_budget,
     };
     let result = sim.run_from(options.threads, &mut refs, &progress, &control);
     drop(refs);

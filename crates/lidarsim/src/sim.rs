@@ -461,6 +461,7 @@ impl<'a> Simulator<'a> {
             });
             let mut send_failed = false;
             let mut stopped_at = None;
+            let mut sent = 0u64;
             'lines: for (l, line) in self
                 .survey
                 .lines
@@ -475,11 +476,14 @@ impl<'a> Simulator<'a> {
                     0
                 };
                 while k < n {
-                    if stopped(control.stop) {
+                    let left = control.pulse_budget.map(|b| b.saturating_sub(sent));
+                    if stopped(control.stop) || left == Some(0) {
                         stopped_at = Some(PulsePosition { line: l, pulse: k });
                         break 'lines;
                     }
-                    let k_end = (k + batch_pulses).min(n);
+                    // Within the budget, rounded up to whole blocks.
+                    let room = left.map_or(u64::MAX, |p| p.div_ceil(BLOCK_PULSES) * BLOCK_PULSES);
+                    let k_end = (k + batch_pulses.min(room)).min(n);
                     let starts: Vec<u64> = (k..k_end).step_by(BLOCK_PULSES as usize).collect();
                     let batch: Vec<_> = pool.install(|| {
                         starts
@@ -494,6 +498,7 @@ impl<'a> Simulator<'a> {
                         send_failed = true;
                         break 'lines;
                     }
+                    sent += k_end - k;
                     k = k_end;
                 }
             }
@@ -527,6 +532,9 @@ pub struct RunControl<'a> {
     pub start: PulsePosition,
     /// Set (by a signal handler, say) to stop at the next block boundary.
     pub stop: Option<&'a AtomicBool>,
+    /// Stop once this many pulses were simulated, rounded up to a whole
+    /// block (at the end of a line, where the line ends): a run in slices.
+    pub pulse_budget: Option<u64>,
 }
 
 /// What [`Simulator::run_from`] did.

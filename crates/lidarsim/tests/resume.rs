@@ -241,27 +241,41 @@ fn interrupted_then_resumed_equals_uninterrupted() {
     std::fs::remove_dir_all(&part).ok();
 }
 
+/// Sessions with a budget of 5 blocks (10 240 pulses; lines of 24 000),
+/// alternately on 1 and 2 threads: they stop at pulses 10 240 and 20 480 of
+/// line 0; the third finishes line 0 (3 520 pulses) and goes on into line 1
+/// up to the next block boundary past its budget (8 192); the fourth stops
+/// at 18 432, the fifth completes — deterministic, unlike a stop flag
+/// raised from another thread.
 #[test]
 fn many_interruptions_across_lines_still_equal_one_run() {
     let s = survey();
     let full = dir("full1");
     run_to_dir(&s, &full, &RunOptions::new(1, &|_| {})).unwrap();
     let part = dir("many");
-    let mut summary = session(&s, &part, false, 1, 1);
-    let mut sessions = 1;
-    let mut lines_seen = std::collections::BTreeSet::new();
-    while !summary.complete {
-        lines_seen.insert(summary.next_pulse.unwrap().line);
-        let s2 = Survey::load(&part.join("survey.toml")).unwrap();
-        summary = session(&s2, &part, true, 1, 1 + sessions % 2);
-        sessions += 1;
-        assert!(sessions < 50);
+    let budget = 5 * lidarsim::sim::BLOCK_PULSES;
+    let mut stops = Vec::new();
+    let mut resume = false;
+    loop {
+        let s2 = if resume {
+            Survey::load(&part.join("survey.toml")).unwrap()
+        } else {
+            survey()
+        };
+        let mut o = RunOptions::new(1 + stops.len() % 2, &|_| {});
+        o.resume = resume;
+        o.pulse_budget = Some(budget);
+        let summary = run_to_dir(&s2, &part, &o).unwrap();
+        if summary.complete {
+            break;
+        }
+        let next = summary.next_pulse.unwrap();
+        stops.push((next.line, next.pulse));
+        resume = true;
+        assert!(stops.len() < 20);
     }
-    println!("{sessions} sessions, stops on lines {lines_seen:?}");
-    assert!(
-        sessions >= 3 && lines_seen.len() == 2,
-        "{sessions} {lines_seen:?}"
-    );
+    println!("stops (line, pulse): {stops:?}");
+    assert_eq!(stops, [(0, 10_240), (0, 20_480), (1, 8_192), (1, 18_432)]);
     assert_same_run(&full, &part);
     std::fs::remove_dir_all(&full).ok();
     std::fs::remove_dir_all(&part).ok();
