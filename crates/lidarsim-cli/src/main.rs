@@ -7,6 +7,7 @@
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -14,6 +15,13 @@ use lidarsim::Survey;
 use lidarsim::accel::Bvh;
 use lidarsim::plan::plan;
 use lidarsim::run::{RunOptions, Summary, run_to_dir};
+
+/// Prints a line to standard error, ignoring a closed pipe (`2>&1 | head`).
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
 
 /// Prints a line to standard output, ignoring a closed pipe (`| head`).
 macro_rules! say {
@@ -50,19 +58,25 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         export_survey: Option<PathBuf>,
     },
-    /// Simulate a survey file.
+    /// Simulate a survey file (Ctrl-C stops at the next block of pulses
+    /// with valid files; `--resume DIR` continues such a run).
     Run {
         /// The survey (TOML).
-        survey: PathBuf,
+        #[arg(required_unless_present = "resume")]
+        survey: Option<PathBuf>,
         /// Output directory.
-        #[arg(short, long, default_value = "out")]
+        #[arg(short, long, default_value = "out", conflicts_with = "resume")]
         output: PathBuf,
         /// Worker threads (default: all cores).
         #[arg(long)]
         threads: Option<usize>,
         /// Seed of all random streams (overrides the file's).
-        #[arg(long)]
+        #[arg(long, conflicts_with = "resume")]
         seed: Option<u64>,
+        /// Continue the interrupted run in DIR (with its survey.toml) up to
+        /// the files an uninterrupted run would have written.
+        #[arg(long, value_name = "DIR", conflicts_with = "survey")]
+        resume: Option<PathBuf>,
     },
     /// Validate a survey file and print what it will give, without simulating.
     Check {
@@ -124,8 +138,27 @@ enum Command {
     },
 }
 
+/// Set by the first Ctrl-C (SIGINT) or SIGTERM: the run stops at the next
+/// block of pulses and finishes its files.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+/// Exit status of a run stopped by a signal (128 + SIGINT).
+const INTERRUPTED: u8 = 130;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // A second signal while the files are being finished ends the program
+    // at once (leaving only `.partial` files behind).
+    let handler = ctrlc::set_handler(|| {
+        if STOP.swap(true, Ordering::SeqCst) {
+            note!("\nstopped without finishing the files");
+            std::process::exit(i32::from(INTERRUPTED));
+        }
+        note!("\ninterrupted: finishing the files for the pulses simulated so far…");
+    });
+    if let Err(e) = handler {
+        note!("warning: Ctrl-C will not stop runs cleanly: {e}");
+    }
     match cli.command {
         Command::Demo {
             output,
@@ -145,7 +178,7 @@ fn main() -> ExitCode {
                 if let Err(e) = lidarsim::output::write_atomic(&path, text.as_bytes()) {
                     return fail(1, &format!("{}: {e}", path.display()));
                 }
-                eprintln!("wrote the demo survey to {}", path.display());
+                note!("wrote the demo survey to {}", path.display());
             }
             let survey = match Survey::from_raw(raw, None) {
                 Ok(s) => s,
@@ -157,17 +190,35 @@ fn main() -> ExitCode {
                     return fail(1, &list.join("\n"));
                 }
             };
-            simulate(survey, &output, threads)
+            simulate(survey, &output, threads, false)
         }
         Command::Run {
             survey,
             output,
             threads,
             seed,
-        } => match Survey::load_with_seed(&survey, seed) {
-            Ok(s) => simulate(s, &output, threads),
-            Err(e) => fail_survey(&e),
-        },
+            resume,
+        } => {
+            let (path, output, resuming) = match (resume, survey) {
+                (Some(dir), _) => (dir.join("survey.toml"), dir, true),
+                (None, Some(survey)) => (survey, output, false),
+                (None, None) => return fail(2, "give a survey file or --resume DIR"),
+            };
+            if resuming && !path.exists() {
+                return fail(
+                    2,
+                    &format!(
+                        "{}: no such file: {} does not hold a run to resume",
+                        path.display(),
+                        output.display()
+                    ),
+                );
+            }
+            match Survey::load_with_seed(&path, seed) {
+                Ok(s) => simulate(s, &output, threads, resuming),
+                Err(e) => fail_survey(&e),
+            }
+        }
         Command::Render {
             cloud,
             output,
@@ -295,30 +346,41 @@ fn bench(
 }
 
 fn fail(code: u8, message: &str) -> ExitCode {
-    eprintln!("error: {message}");
+    note!("error: {message}");
     ExitCode::from(code)
 }
 
 /// Reports every problem of a survey file, exit status 2.
 fn fail_survey(e: &lidarsim::survey::SurveyError) -> ExitCode {
-    for d in &e.diagnostics {
-        eprintln!("error: {d}");
+    for (i, d) in e.diagnostics.iter().enumerate() {
+        if i > 0 {
+            note!("");
+        }
+        note!("error: {d}");
+    }
+    if e.diagnostics.len() > 1 {
+        note!("\n{} problems found", e.diagnostics.len());
     }
     ExitCode::from(2)
 }
 
-/// Prints the survey's warnings to standard error.
-fn warn(survey: &Survey) {
-    let file = survey
+/// The survey's file name for messages (`<demo>` for the built-in one).
+fn source_name(survey: &Survey) -> String {
+    survey
         .source
         .as_ref()
-        .map_or_else(|| "<demo>".to_string(), |p| p.display().to_string());
+        .map_or_else(|| "<demo>".to_string(), |p| p.display().to_string())
+}
+
+/// Prints the survey's warnings to standard error.
+fn warn(survey: &Survey) {
+    let file = source_name(survey);
     for w in &survey.warnings {
-        eprintln!("warning: {file}: {w}");
+        note!("warning: {file}: {w}");
     }
 }
 
-fn simulate(survey: Survey, output: &Path, threads: Option<usize>) -> ExitCode {
+fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool) -> ExitCode {
     warn(&survey);
     let threads = match threads {
         Some(0) => return fail(2, "--threads must be at least 1"),
@@ -344,10 +406,29 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>) -> ExitCode {
         &RunOptions {
             threads,
             progress: &progress,
+            stop: Some(&STOP),
+            resume,
+            pulse_budget: None,
+            on_warning: Some(&|w: &str| {
+                bar.suspend(|| note!("warning: {}: {w}", source_name(&survey)));
+            }),
         },
     );
     bar.finish_and_clear();
     match result {
+        Ok(summary) if !summary.complete => {
+            let next = summary.next_pulse.unwrap_or_default();
+            note!(
+                "interrupted after {} pulses: the files in {} hold them and are valid; \
+                 summary.json says \"complete\": false, next pulse {} of line {}",
+                summary.pulses,
+                output.display(),
+                next.pulse,
+                next.line + 1
+            );
+            note!("continue with: lidarsim run --resume {}", output.display());
+            ExitCode::from(INTERRUPTED)
+        }
         Ok(summary) => {
             report(&summary, output);
             ExitCode::SUCCESS
@@ -448,7 +529,7 @@ fn render(
     resolution: Option<f64>,
     profile: Option<&str>,
 ) -> Result<(), (u8, String)> {
-    use lidarsim::render::{ColorBy, RenderPoint};
+    use lidarsim::render::ColorBy;
     let by = ColorBy::from_name(color).ok_or_else(|| {
         (
             2,
@@ -480,9 +561,55 @@ fn render(
             Some(v)
         }
     };
-    let bad = |e: las::Error| (1, format!("{}: {e}", cloud.display()));
+    let points = read_cloud(cloud).map_err(|e| (1, e))?;
+    let img = match section {
+        None => lidarsim::render::top_view(&points, by, resolution),
+        Some(v) => {
+            lidarsim::render::profile(&points, (v[0], v[1]), (v[2], v[3]), v[4], by, resolution)
+        }
+    };
+    img.save_png(output)
+        .map_err(|e| (1, format!("{}: {e}", output.display())))
+}
+
+/// Reads every point of a LAS file for rendering. Errors name the file and
+/// say what is wrong in words (a truncated file, a header that promises
+/// more points than the file holds) before any large allocation.
+fn read_cloud(cloud: &Path) -> Result<Vec<lidarsim::render::RenderPoint>, String> {
+    use lidarsim::render::RenderPoint;
+    let bad = |e: las::Error| {
+        let why = match &e {
+            las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+                "the file ends early: it is truncated or not a LAS file".to_string()
+            }
+            las::Error::Io(io) if io.kind() == std::io::ErrorKind::InvalidInput => {
+                "its header points outside the file (point count or offsets too large)".to_string()
+            }
+            _ => e.to_string(),
+        };
+        format!("{}: {why}", cloud.display())
+    };
+    let size = std::fs::metadata(cloud)
+        .map_err(|e| format!("{}: {e}", cloud.display()))?
+        .len();
     let mut reader = las::Reader::from_path(cloud).map_err(bad)?;
-    let points: Vec<RenderPoint> = reader
+    let header = reader.header();
+    let count = header.number_of_points();
+    let record = u64::from(header.point_format().len());
+    // Compressed (LAZ) points take less room than their records, but not
+    // less than a byte each.
+    let compressed = header.point_format().is_compressed;
+    match count.checked_mul(record) {
+        Some(bytes) if bytes <= size || (compressed && count <= size) => {}
+        _ => {
+            return Err(format!(
+                "{}: the header counts {count} points of {record} bytes, more than the file's \
+                 {size} bytes hold: it is truncated or its header is wrong",
+                cloud.display()
+            ));
+        }
+    }
+    reader
         .read_all()
         .map_err(bad)?
         .points()
@@ -498,16 +625,22 @@ fn render(
                 source: p.point_source_id,
             })
         })
-        .collect::<Result<_, _>>()
-        .map_err(bad)?;
-    let img = match section {
-        None => lidarsim::render::top_view(&points, by, resolution),
-        Some(v) => {
-            lidarsim::render::profile(&points, (v[0], v[1]), (v[2], v[3]), v[4], by, resolution)
-        }
-    };
-    img.save_png(output)
-        .map_err(|e| (1, format!("{}: {e}", output.display())))
+        .collect::<Result<Vec<RenderPoint>, _>>()
+        .map_err(bad)
+        .and_then(|points| {
+            match points
+                .iter()
+                .position(|p| !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()))
+            {
+                Some(i) => Err(format!(
+                    "{}: point {} has a coordinate that is not a finite number (check the \
+                     header's scale and offset)",
+                    cloud.display(),
+                    i + 1
+                )),
+                None => Ok(points),
+            }
+        })
 }
 
 fn report(s: &Summary, output: &Path) {
@@ -533,6 +666,9 @@ fn report(s: &Summary, output: &Path) {
 fn check(survey: &Survey) {
     let bvh = Bvh::build(survey.scene.clone());
     let p = plan(survey, &bvh);
+    for w in lidarsim::plan::warnings(survey, &bvh, &p) {
+        note!("warning: {}: {w}", source_name(survey));
+    }
     say!(
         "survey OK: {} flight line(s), {} scene primitives, seed {}",
         survey.lines.len(),
@@ -567,6 +703,71 @@ fn check(survey: &Survey) {
             l.point_density_per_m2,
             l.scan_line_spacing_m,
             l.across_track_spacing_m
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::read_cloud;
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+    use std::cell::Cell;
+
+    /// The LAS reader of `render` on 256 mangled copies of a valid file
+    /// (bytes changed anywhere, the header most often, or cut short):
+    /// never a panic or a huge allocation, errors name the file.
+    #[test]
+    fn render_reads_mangled_las_files_without_panicking() {
+        let dir = std::env::temp_dir().join(format!("lidarsim-cli-fuzz-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let good = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/corpus/las/count_too_large.las");
+        let mut bytes = std::fs::read(good).unwrap();
+        // Repair the corpus file's point count (40 points).
+        bytes[247..255].copy_from_slice(&40u64.to_le_bytes());
+        let path = dir.join("mangled.las");
+        std::fs::write(&path, &bytes).unwrap();
+        assert_eq!(read_cloud(&path).unwrap().len(), 40);
+        let n = bytes.len();
+        let at = prop_oneof![3 => 0..375usize, 1 => 0..n];
+        let edits = proptest::collection::vec((at, any::<u8>()), 1..6);
+        let cut = prop_oneof![3 => Just(n), 1 => 0..n];
+        let mut runner = TestRunner::new_with_rng(
+            Config {
+                cases: 256,
+                failure_persistence: None,
+                ..Config::default()
+            },
+            TestRng::deterministic_rng(RngAlgorithm::ChaCha),
+        );
+        let (ok, rejected) = (Cell::new(0u32), Cell::new(0u32));
+        runner
+            .run(&(edits, cut), |(edits, cut)| {
+                let mut b = bytes.clone();
+                for (at, v) in edits {
+                    b[at] = v;
+                }
+                b.truncate(cut);
+                std::fs::write(&path, &b).unwrap();
+                match read_cloud(&path) {
+                    Ok(points) => {
+                        ok.set(ok.get() + 1);
+                        prop_assert!(points.len() <= 40);
+                    }
+                    Err(e) => {
+                        rejected.set(rejected.get() + 1);
+                        prop_assert!(e.contains("mangled.las"), "{e}");
+                    }
+                }
+                Ok(())
+            })
+            .unwrap();
+        std::fs::remove_dir_all(&dir).ok();
+        println!(
+            "LAS for render: 256 cases, {} read, {} rejected naming the file",
+            ok.get(),
+            rejected.get()
         );
     }
 }

@@ -468,3 +468,47 @@ fn waveform_plots_a_pulse_of_a_run() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn suspicious_settings_are_warned_about_with_their_numbers() {
+    // The line flies 2 km east of the scene (ground at z = 0 all the same),
+    // and at 600 kHz pulses leave every 1.67 µs while the echo from the
+    // swath edge, 300 / cos 15° = 310.6 m away, returns after 2.07 µs.
+    let text = GOOD
+        .replace("prf_hz = 20000", "prf_hz = 600000")
+        .replace(
+            "start_m = [0.0, -10.0, 300.0]",
+            "start_m = [2000.0, -10.0, 300.0]",
+        )
+        .replace(
+            "end_m = [0.0, 10.0, 300.0]",
+            "end_m = [2000.0, 10.0, 300.0]",
+        );
+    let dir = temp("warn");
+    std::fs::write(dir.join("s.toml"), &text).unwrap();
+    let c = bin().arg("check").arg(dir.join("s.toml")).output().unwrap();
+    let stderr = String::from_utf8_lossy(&c.stderr);
+    assert!(c.status.success(), "{stderr}");
+    assert!(stderr.contains("warning: "), "{stderr}");
+    assert!(stderr.contains("no pulse can hit the scene"), "{stderr}");
+    assert!(
+        stderr.contains("multiple pulses in the air")
+            && stderr.contains("2.07 µs")
+            && stderr.contains("1.67 µs"),
+        "{stderr}"
+    );
+    let (o, out) = run_survey(&dir, &text);
+    assert!(o.status.success());
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("no pulse can hit the scene"), "{stderr}");
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let warnings = summary["warnings"].as_array().unwrap();
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.as_str().unwrap().contains("no pulse can hit"))
+    );
+    assert_eq!(summary["points"], 0);
+    std::fs::remove_dir_all(&dir).ok();
+}

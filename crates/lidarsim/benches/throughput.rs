@@ -150,15 +150,7 @@ fn main() {
     // Whole run with LAS + XYZ output, 2 threads.
     let dir = std::env::temp_dir().join(format!("lidarsim-bench-{}", std::process::id()));
     let t = Instant::now();
-    let s = run_to_dir(
-        &demo,
-        &dir,
-        &RunOptions {
-            threads: 2,
-            progress: &|_| {},
-        },
-    )
-    .expect("demo run");
+    let s = run_to_dir(&demo, &dir, &RunOptions::new(2, &|_| {})).expect("demo run");
     println!(
         "demo_with_output threads=2 pulses_per_s={:.0} seconds={:.2}",
         s.pulses as f64 / t.elapsed().as_secs_f64(),

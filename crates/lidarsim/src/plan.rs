@@ -11,7 +11,7 @@
 use serde::Serialize;
 
 use crate::accel::RayCaster;
-use crate::geometry::{DVec3, Ray};
+use crate::geometry::{Aabb, DVec3, Ray, SPEED_OF_LIGHT_MPS};
 use crate::scene::SurfaceClass;
 use crate::survey::Survey;
 
@@ -152,5 +152,189 @@ pub fn plan(survey: &Survey, caster: &dyn RayCaster) -> Plan {
         flight_time_s,
         pulses,
         lines,
+    }
+}
+
+/// Settings that are possible but physically suspicious for this scene,
+/// each with its reason and numbers:
+///
+/// * the ground nearer than `scanner.min_range_m` (no echo recorded) or
+///   farther than `scanner.max_range_m` (none either), or swath edges beyond
+///   `max_range_m`;
+/// * multiple pulses in the air: the round trip `2R/c` to the farthest
+///   expected range (the swath edge, at most `max_range_m`) longer than the
+///   time `1/PRF` between pulses, so that a real receiver could not tell
+///   which pulse an echo belongs to without multiple-time-around processing;
+/// * swaths that miss the scene's bounding box (no pulse of that line can
+///   hit anything), for some lines or for all of them.
+pub fn warnings(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> Vec<String> {
+    let s = &survey.scanner;
+    let theta = s.mirror.scan_half_angle_rad;
+    let mut out = Vec::new();
+    let mut farthest: Option<(f64, u32)> = None;
+    let scene = caster.scene().bounds();
+    let mut missing = Vec::new();
+    let mut swaths = Aabb::EMPTY;
+    for (line, lp) in survey.lines.iter().zip(&plan.lines) {
+        let n = lp.line + 1;
+        let h = lp.height_above_ground_m;
+        let edge = h / theta.cos();
+        if h > 0.0 && h < s.min_range_m {
+            out.push(format!(
+                "flight line {n}: the ground is {h:.1} m below the scanner, nearer than \
+                 scanner.min_range_m = {} m: no echo from it will be recorded",
+                s.min_range_m
+            ));
+        } else if h > s.max_range_m {
+            out.push(format!(
+                "flight line {n}: the ground is {h:.1} m below the scanner, beyond \
+                 scanner.max_range_m = {} m: no echo from it will be recorded",
+                s.max_range_m
+            ));
+        } else if edge > s.max_range_m {
+            out.push(format!(
+                "flight line {n}: at the swath edges (scan angle {:.1}°) the ground is {edge:.1} m \
+                 away, beyond scanner.max_range_m = {} m: pulses near the edges record no \
+                 ground echo",
+                theta.to_degrees(),
+                s.max_range_m
+            ));
+        }
+        let r = edge.min(s.max_range_m);
+        if farthest.is_none_or(|(f, _)| r > f) {
+            farthest = Some((r, n));
+        }
+        // The area the line's pulses can reach: its path (sampled, for
+        // curved tracks) widened by half the swath and the footprint.
+        let reach = lp.swath_width_m / 2.0 + lp.footprint_diameter_m + 1.0;
+        let mut area = Aabb::EMPTY;
+        let samples = 64;
+        for k in 0..=samples {
+            let p = line.pose_at(line.duration_s() * f64::from(k) / f64::from(samples));
+            area = area.union_point(p.position_m);
+        }
+        let grow = DVec3::new(reach, reach, 0.0);
+        let (lo, hi) = (area.min - grow, area.max + grow);
+        swaths = swaths.union_point(lo).union_point(hi);
+        let overlaps = !scene.is_empty()
+            && lo.x <= scene.max.x
+            && hi.x >= scene.min.x
+            && lo.y <= scene.max.y
+            && hi.y >= scene.min.y;
+        if !overlaps {
+            missing.push(n);
+        }
+    }
+    if let Some((r, n)) = farthest {
+        let round_trip_s = 2.0 * r / SPEED_OF_LIGHT_MPS;
+        let period_s = 1.0 / s.prf_hz;
+        if r > 0.0 && round_trip_s > period_s {
+            out.push(format!(
+                "multiple pulses in the air: on flight line {n} the echo from {r:.1} m away \
+                 returns after 2R/c = {:.2} µs, but pulses leave every 1/PRF = {:.2} µs \
+                 (scanner.prf_hz = {}); a real receiver would need multiple-time-around \
+                 processing to assign such echoes, the simulation assigns each echo to its own \
+                 pulse",
+                round_trip_s * 1e6,
+                period_s * 1e6,
+                s.prf_hz
+            ));
+        }
+    }
+    if !missing.is_empty() && !survey.lines.is_empty() {
+        let scene_text = if scene.is_empty() {
+            "the scene is empty".to_string()
+        } else {
+            format!(
+                "the scene spans x {:.1} to {:.1} m, y {:.1} to {:.1} m",
+                scene.min.x, scene.max.x, scene.min.y, scene.max.y
+            )
+        };
+        if missing.len() == survey.lines.len() {
+            out.push(format!(
+                "no pulse can hit the scene: the swaths of the flight lines cover x {:.1} to \
+                 {:.1} m, y {:.1} to {:.1} m, but {scene_text}",
+                swaths.min.x, swaths.max.x, swaths.min.y, swaths.max.y
+            ));
+        } else {
+            let list: Vec<String> = missing.iter().map(u32::to_string).collect();
+            out.push(format!(
+                "flight line(s) {}: the swath misses the scene ({scene_text}): those pulses hit \
+                 nothing",
+                list.join(", ")
+            ));
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::Bvh;
+
+    fn warnings_of(scanner: &str, line_x_m: f64, height_m: f64) -> Vec<String> {
+        let text = format!(
+            "[scanner]\n{scanner}\n[[flight_line]]\nstart_m = [{line_x_m}, -100.0, {height_m}]\n\
+             end_m = [{line_x_m}, 100.0, {height_m}]\nspeed_mps = 50.0\n\
+             [materials.grass]\nreflectance = 0.4\n[[polygon]]\nmaterial = \"grass\"\n\
+             class = \"ground\"\nvertices_m = [[-500, -500, 0], [500, -500, 0], [500, 500, 0], \
+             [-500, 500, 0]]\n"
+        );
+        let survey = Survey::from_toml(&text, None).unwrap();
+        let bvh = Bvh::build(survey.scene.clone());
+        let p = plan(&survey, &bvh);
+        warnings(&survey, &bvh, &p)
+    }
+
+    #[test]
+    fn multiple_pulses_in_the_air_when_the_round_trip_exceeds_the_pulse_period() {
+        // H = 1000 m, θ = 20°: edge range 1000 / cos 20° = 1064.18 m, round
+        // trip 2R/c = 7.0995 µs. At 200 kHz pulses leave every 5 µs.
+        let w = warnings_of("prf_hz = 200000\nscan_angle_deg = 20", 0.0, 1000.0);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].starts_with("multiple pulses in the air"), "{}", w[0]);
+        assert!(
+            w[0].contains("1064.2 m") && w[0].contains("7.10 µs"),
+            "{}",
+            w[0]
+        );
+        assert!(w[0].contains("5.00 µs"), "{}", w[0]);
+        // At 100 kHz (10 µs) one pulse is in the air at a time.
+        assert!(warnings_of("prf_hz = 100000\nscan_angle_deg = 20", 0.0, 1000.0).is_empty());
+    }
+
+    #[test]
+    fn ground_outside_the_receiver_window() {
+        let w = warnings_of("prf_hz = 50000\nmin_range_m = 600", 0.0, 500.0);
+        assert!(
+            w[0].contains("nearer than scanner.min_range_m = 600 m"),
+            "{w:?}"
+        );
+        let w = warnings_of("prf_hz = 50000\nmax_range_m = 400", 0.0, 500.0);
+        assert!(w[0].contains("beyond scanner.max_range_m = 400 m"), "{w:?}");
+        // 500 / cos 20° = 532.1 m at the edges, beyond 520 m.
+        let w = warnings_of(
+            "prf_hz = 50000\nscan_angle_deg = 20\nmax_range_m = 520",
+            0.0,
+            500.0,
+        );
+        assert!(
+            w[0].contains("swath edges") && w[0].contains("532.1 m"),
+            "{w:?}"
+        );
+        assert!(warnings_of("prf_hz = 50000\nscan_angle_deg = 20", 0.0, 500.0).is_empty());
+    }
+
+    #[test]
+    fn swaths_that_miss_the_scene() {
+        // 500 m up at 20°: swath 364 m; a line at x = 2000 m is 1500 m
+        // beyond the scene's edge at x = 500 m.
+        let w = warnings_of("prf_hz = 50000\nscan_angle_deg = 20", 2000.0, 500.0);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(w[0].starts_with("no pulse can hit the scene"), "{}", w[0]);
+        assert!(w[0].contains("x -500.0 to 500.0 m"), "{}", w[0]);
+        // At x = 600 m the swath (half width 182 m) reaches the scene.
+        assert!(warnings_of("prf_hz = 50000\nscan_angle_deg = 20", 600.0, 500.0).is_empty());
     }
 }

@@ -195,6 +195,156 @@ impl ReportSink {
     }
 }
 
+/// First bytes of a saved [`ReportSink`] state (format version 1).
+const STATE_MAGIC: &[u8; 8] = b"LSREPRT1";
+
+impl ReportSink {
+    /// Writes everything the sink has gathered, so that an interrupted run
+    /// can continue it with [`ReportSink::restore`] (little-endian binary:
+    /// the grid, the per-pixel arrays, the histogram, the cross-section
+    /// points and the two sample pulses).
+    pub fn save(&self, w: &mut dyn io::Write) -> io::Result<()> {
+        let mut b = Vec::with_capacity(self.count.len() * 11 + self.profile.len() * 32 + 256);
+        b.extend_from_slice(STATE_MAGIC);
+        for v in [self.width as u64, self.height as u64] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [self.x0, self.y0, self.resolution_m, self.profile_y] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for k in 0..self.count.len() {
+            b.extend_from_slice(&self.top_z[k].to_le_bytes());
+            b.extend_from_slice(&self.top_intensity[k].to_le_bytes());
+            b.push(self.top_class[k]);
+            b.extend_from_slice(&self.count[k].to_le_bytes());
+        }
+        for n in self.returns_per_pulse {
+            b.extend_from_slice(&n.to_le_bytes());
+        }
+        b.extend_from_slice(&(self.profile.len() as u64).to_le_bytes());
+        for p in &self.profile {
+            for v in [p.x, p.y, p.z] {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+            b.extend_from_slice(&p.intensity.to_le_bytes());
+            b.extend_from_slice(&[p.classification, p.return_number, p.number_of_returns]);
+            b.extend_from_slice(&p.source.to_le_bytes());
+        }
+        let (flag, (line, pulse, n)) = match self.richest_pulse {
+            Some(r) => (1u8, r),
+            None => (0, (0, 0, 0)),
+        };
+        b.push(flag);
+        b.extend_from_slice(&line.to_le_bytes());
+        b.extend_from_slice(&pulse.to_le_bytes());
+        b.push(n);
+        let (flag, (line, pulse)) = match self.single_pulse {
+            Some(r) => (1u8, r),
+            None => (0, (0, 0)),
+        };
+        b.push(flag);
+        b.extend_from_slice(&line.to_le_bytes());
+        b.extend_from_slice(&pulse.to_le_bytes());
+        w.write_all(&b)
+    }
+
+    /// Continues from a state written by [`ReportSink::save`]; `self` must be
+    /// a new sink over the same area (the grid is compared).
+    pub fn restore(&mut self, bytes: &[u8]) -> io::Result<()> {
+        let mut r = StateReader { bytes, at: 0 };
+        if r.take(8)? != STATE_MAGIC {
+            return Err(state_error("not a report state"));
+        }
+        let (w, h) = (r.u64()?, r.u64()?);
+        let grid = [r.f64()?, r.f64()?, r.f64()?, r.f64()?];
+        if (w, h) != (self.width as u64, self.height as u64)
+            || grid != [self.x0, self.y0, self.resolution_m, self.profile_y]
+        {
+            return Err(state_error("it was made for another area"));
+        }
+        for k in 0..self.count.len() {
+            self.top_z[k] = f32::from_bits(r.u32()?);
+            self.top_intensity[k] = r.u16()?;
+            self.top_class[k] = r.u8()?;
+            self.count[k] = r.u32()?;
+        }
+        for n in &mut self.returns_per_pulse {
+            *n = r.u64()?;
+        }
+        let n = r.u64()?;
+        if n > MAX_PROFILE_POINTS as u64 {
+            return Err(state_error("too many cross-section points"));
+        }
+        self.profile.clear();
+        for _ in 0..n {
+            self.profile.push(RenderPoint {
+                x: r.f64()?,
+                y: r.f64()?,
+                z: r.f64()?,
+                intensity: r.u16()?,
+                classification: r.u8()?,
+                return_number: r.u8()?,
+                number_of_returns: r.u8()?,
+                source: r.u16()?,
+            });
+        }
+        let (flag, line, pulse, n) = (r.u8()?, r.u32()?, r.u64()?, r.u8()?);
+        self.richest_pulse = (flag == 1).then_some((line, pulse, n));
+        let (flag, line, pulse) = (r.u8()?, r.u32()?, r.u64()?);
+        self.single_pulse = (flag == 1).then_some((line, pulse));
+        if r.at != bytes.len() {
+            return Err(state_error("trailing bytes"));
+        }
+        Ok(())
+    }
+}
+
+fn state_error(what: &str) -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidData,
+        format!("bad report state: {what}"),
+    )
+}
+
+/// Little-endian reader over a saved state.
+struct StateReader<'a> {
+    bytes: &'a [u8],
+    at: usize,
+}
+
+impl StateReader<'_> {
+    fn take(&mut self, n: usize) -> io::Result<&[u8]> {
+        let end = self
+            .at
+            .checked_add(n)
+            .filter(|&e| e <= self.bytes.len())
+            .ok_or_else(|| state_error("truncated"))?;
+        let s = &self.bytes[self.at..end];
+        self.at = end;
+        Ok(s)
+    }
+    fn array<const N: usize>(&mut self) -> io::Result<[u8; N]> {
+        let mut a = [0u8; N];
+        a.copy_from_slice(self.take(N)?);
+        Ok(a)
+    }
+    fn u8(&mut self) -> io::Result<u8> {
+        Ok(self.array::<1>()?[0])
+    }
+    fn u16(&mut self) -> io::Result<u16> {
+        Ok(u16::from_le_bytes(self.array()?))
+    }
+    fn u32(&mut self) -> io::Result<u32> {
+        Ok(u32::from_le_bytes(self.array()?))
+    }
+    fn u64(&mut self) -> io::Result<u64> {
+        Ok(u64::from_le_bytes(self.array()?))
+    }
+    fn f64(&mut self) -> io::Result<f64> {
+        Ok(f64::from_le_bytes(self.array()?))
+    }
+}
+
 impl PointSink for ReportSink {
     fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
         for p in points {

@@ -1,18 +1,20 @@
 //! A whole run into an output directory: points, trajectory and summary.
 
+use std::collections::BTreeMap;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::accel::{Bvh, RayCaster};
 use crate::navigation::observed_pose;
 use crate::output::{
-    AtomicFile, LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter, write_atomic,
+    AtomicFile, FileError, LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter, write_atomic,
 };
 use crate::plan::{Plan, plan};
 use crate::report::ReportSink;
-use crate::sim::{RunCounts, Simulator, Timer};
+use crate::sim::{PulsePosition, RunControl, RunCounts, Simulator, Timer};
 use crate::survey::Survey;
 
 /// A failure while writing the results.
@@ -29,8 +31,37 @@ pub struct RunError {
 pub struct RunOptions<'a> {
     /// Worker threads (≥ 1).
     pub threads: usize,
-    /// Called with the number of pulses simulated so far.
+    /// Called with the number of pulses simulated so far (those of an
+    /// interrupted run included when resuming).
     pub progress: &'a (dyn Fn(u64) + Sync),
+    /// When set (by a Ctrl-C handler, say), the run stops at the next block
+    /// of pulses, finishes every file for what was simulated and writes a
+    /// `summary.json` with `"complete": false` and the next pulse.
+    pub stop: Option<&'a AtomicBool>,
+    /// Continue the interrupted run in the output directory instead of
+    /// starting afresh (the survey must be the one it ran: its
+    /// `survey.toml`).
+    pub resume: bool,
+    /// Stop (as if interrupted) once this many pulses were simulated in
+    /// this call, rounded up to a whole block of 2048: long runs in slices.
+    pub pulse_budget: Option<u64>,
+    /// Called, before simulating, with each warning about the survey over
+    /// its scene ([`crate::plan::warnings`]; they also go into the summary).
+    pub on_warning: Option<&'a (dyn Fn(&str) + Sync)>,
+}
+
+impl<'a> RunOptions<'a> {
+    /// A fresh, uninterruptible run on `threads` threads.
+    pub fn new(threads: usize, progress: &'a (dyn Fn(u64) + Sync)) -> Self {
+        Self {
+            threads,
+            progress,
+            stop: None,
+            resume: false,
+            pulse_budget: None,
+            on_warning: None,
+        }
+    }
 }
 
 /// Contents of `summary.json`.
@@ -38,8 +69,17 @@ pub struct RunOptions<'a> {
 pub struct Summary {
     /// Version of the simulator.
     pub lidarsim_version: &'static str,
-    /// True when every pulse was simulated and every file written.
+    /// True when every pulse was simulated and every file written; false
+    /// for a run that was interrupted (see `next_pulse`).
     pub complete: bool,
+    /// Of an interrupted run: the first pulse not simulated, where
+    /// `lidarsim run --resume` continues.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub next_pulse: Option<PulsePosition>,
+    /// Of an interrupted run: the length in bytes of each point file, which
+    /// a resumed run checks and appends to.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point_file_bytes: Option<BTreeMap<String, u64>>,
     /// Seed of the random streams.
     pub seed: u64,
     /// Worker threads.
@@ -56,7 +96,8 @@ pub struct Summary {
     pub subrays_per_pulse: usize,
     /// Laser wavelength, nm (for the record: reflectances are given at it).
     pub wavelength_nm: f64,
-    /// Wall-clock time of the simulation (scene indexing excluded), s.
+    /// Wall-clock time of the simulation (scene indexing excluded), s;
+    /// summed over the sessions of a resumed run.
     pub wall_time_s: f64,
     /// Time to build the acceleration structure, s.
     pub index_time_s: f64,
@@ -86,11 +127,100 @@ pub struct Summary {
     pub plan: Plan,
 }
 
+/// What a resumed run reads back from the `summary.json` of the
+/// interrupted one.
+#[derive(Debug, Deserialize)]
+struct Interrupted {
+    complete: bool,
+    seed: u64,
+    next_pulse: Option<PulsePosition>,
+    #[serde(default)]
+    point_file_bytes: BTreeMap<String, u64>,
+    pulses: u64,
+    points: u64,
+    pulses_with_echo: u64,
+    points_by_return: Vec<u64>,
+    wall_time_s: f64,
+}
+
+/// Name of the saved report state of an interrupted run.
+pub const REPORT_STATE: &str = "report.state";
+
+/// A [`RunError`] from an error of the simulation or a sink: the file it
+/// names (see [`crate::output::file_error`]), or `dir`.
+fn run_error(dir: &Path, e: io::Error) -> RunError {
+    if e.get_ref().is_some_and(|i| i.is::<FileError>()) {
+        let kind = e.kind();
+        if let Some(Ok(fe)) = e.into_inner().map(|i| i.downcast::<FileError>()) {
+            return RunError {
+                path: fe.path,
+                source: fe.source,
+            };
+        }
+        return RunError {
+            path: dir.to_path_buf(),
+            source: io::Error::from(kind),
+        };
+    }
+    RunError {
+        path: dir.to_path_buf(),
+        source: e,
+    }
+}
+
+/// Reads the `summary.json` of an interrupted run in `out_dir`.
+fn read_interrupted(survey: &Survey, out_dir: &Path) -> Result<Interrupted, RunError> {
+    let path = out_dir.join("summary.json");
+    let bad = |msg: String| RunError {
+        path: path.clone(),
+        source: io::Error::new(io::ErrorKind::InvalidData, msg),
+    };
+    let text = std::fs::read(&path).map_err(|e| RunError {
+        path: path.clone(),
+        source: io::Error::new(
+            e.kind(),
+            format!("{e}: no interrupted run to resume in this directory"),
+        ),
+    })?;
+    let prev: Interrupted = serde_json::from_slice(&text)
+        .map_err(|e| bad(format!("not a summary of lidarsim: {e}")))?;
+    if prev.complete {
+        return Err(bad("the run is complete: there is nothing to resume".into()));
+    }
+    if prev.seed != survey.seed {
+        return Err(bad(format!(
+            "the run used seed {} but the survey has seed {}: resume with the run's own survey.toml",
+            prev.seed, survey.seed
+        )));
+    }
+    if prev.next_pulse.is_none() {
+        return Err(bad("no next_pulse recorded".into()));
+    }
+    Ok(prev)
+}
+
+/// The length `name` had when the run in `prev` was interrupted.
+fn recorded_len(prev: &Interrupted, name: &str, summary_path: &Path) -> Result<u64, RunError> {
+    prev.point_file_bytes
+        .get(name)
+        .copied()
+        .ok_or_else(|| RunError {
+            path: summary_path.to_path_buf(),
+            source: io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!("the interrupted run recorded no length of {name}"),
+            ),
+        })
+}
+
 /// Simulates `survey` and writes the point files of `[output] formats`
 /// (`points.las` with `points.wdp` for full waveforms, `points.laz`,
 /// `points.ply`, `points.xyz`), the trajectories, `report.html` and
-/// `summary.json` into `out_dir` (created if needed).
-/// Files appear under their final names only when complete.
+/// `summary.json` into `out_dir` (created if needed). Files appear under their final names only when complete — or, when
+/// `options.stop` interrupts the run, finished for the pulses simulated so
+/// far, with `summary.json` saying `"complete": false` and where to go on;
+/// with `options.resume` such a run is continued, and its files end up
+/// byte for byte those of an uninterrupted run (apart from the timings).
 pub fn run_to_dir(
     survey: &Survey,
     out_dir: &Path,
@@ -100,23 +230,58 @@ pub fn run_to_dir(
         let path = path.to_path_buf();
         move |source| RunError { path, source }
     };
-    std::fs::create_dir_all(out_dir).map_err(io_err(out_dir))?;
-    // A summary from an earlier run must not describe this one.
     let summary_path = out_dir.join("summary.json");
-    match std::fs::remove_file(&summary_path) {
-        Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(io_err(&summary_path)(e)),
-        _ => {}
-    }
+    let state_path = out_dir.join(REPORT_STATE);
+    let prev = if options.resume {
+        Some(read_interrupted(survey, out_dir)?)
+    } else {
+        std::fs::create_dir_all(out_dir).map_err(|e| RunError {
+            path: out_dir.to_path_buf(),
+            source: io::Error::new(e.kind(), format!("cannot create the output directory: {e}")),
+        })?;
+        // A summary, report or state of an earlier run must not describe
+        // this one.
+        for path in [&summary_path, &state_path, &out_dir.join("report.html")] {
+            match std::fs::remove_file(path) {
+                Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(io_err(path)(e)),
+                _ => {}
+            }
+        }
+        None
+    };
 
     let index_timer = Timer::start();
     let bvh = Bvh::build(survey.scene.clone());
     let index_time_s = index_timer.seconds();
     let plan = plan(survey, &bvh);
+    let scene_warnings = crate::plan::warnings(survey, &bvh, &plan);
+    if let Some(warn) = options.on_warning {
+        for w in &scene_warnings {
+            warn(w);
+        }
+    }
 
     let mut files = Vec::new();
     let mut sinks: Vec<Box<dyn PointSink>> = Vec::new();
     let formats = &survey.output.formats;
     let origin = survey.output.offset_m.to_array();
+    // Files a resumed run continues: uncompressed LAS without waveforms and
+    // XYZ. LAZ, PLY and full-waveform output are finished when a run is
+    // interrupted but cannot be continued.
+    let point_files = [("points.las", formats.las), ("points.xyz", formats.xyz)];
+    if let Some(prev) = &prev
+        && (formats.laz || formats.ply || formats.las_waveform)
+    {
+        let _ = prev;
+        return Err(RunError {
+            path: summary_path.clone(),
+            source: io::Error::new(
+                io::ErrorKind::Unsupported,
+                "this run writes LAZ, PLY or full-waveform files, which cannot be continued: \
+                 run the survey again",
+            ),
+        });
+    }
     // A waveform file from an earlier run must not sit beside this one's
     // points.
     let wdp_path = out_dir.join("points.wdp");
@@ -132,9 +297,18 @@ pub fn run_to_dir(
         if formats.las_waveform {
             settings.waveform = Some(digitizer(survey, &bvh));
         }
-        sinks.push(Box::new(
-            LasWriter::create(&path, settings).map_err(io_err(&path))?,
-        ));
+        let sink: Box<dyn PointSink> = match &prev {
+            None => Box::new(LasWriter::create(&path, settings).map_err(io_err(&path))?),
+            Some(prev) => Box::new(
+                LasWriter::resume(
+                    &path,
+                    settings,
+                    recorded_len(prev, "points.las", &summary_path)?,
+                )
+                .map_err(|e| run_error(out_dir, e))?,
+            ),
+        };
+        sinks.push(sink);
         files.push("points.las".to_string());
         if formats.las_waveform {
             files.push("points.wdp".to_string());
@@ -165,9 +339,18 @@ pub fn run_to_dir(
     }
     if formats.xyz {
         let path = out_dir.join("points.xyz");
-        sinks.push(Box::new(
-            XyzWriter::create(&path, origin).map_err(io_err(&path))?,
-        ));
+        let sink: Box<dyn PointSink> = match &prev {
+            None => Box::new(XyzWriter::create(&path, origin).map_err(io_err(&path))?),
+            Some(prev) => Box::new(
+                XyzWriter::resume(
+                    &path,
+                    recorded_len(prev, "points.xyz", &summary_path)?,
+                    origin,
+                )
+                .map_err(|e| run_error(out_dir, e))?,
+            ),
+        };
+        sinks.push(sink);
         files.push("points.xyz".to_string());
     }
 
@@ -193,26 +376,91 @@ pub fn run_to_dir(
     }
 
     let mut report = ReportSink::new(covered_area(survey, &bvh, &plan), plan.point_density_per_m2);
+    let mut before = RunCounts::default();
+    let mut start = PulsePosition::default();
+    let mut wall_before = 0.0;
+    if let Some(prev) = &prev {
+        let state = std::fs::read(&state_path).map_err(io_err(&state_path))?;
+        report.restore(&state).map_err(io_err(&state_path))?;
+        before.pulses = prev.pulses;
+        before.points = prev.points;
+        before.pulses_with_echo = prev.pulses_with_echo;
+        for (a, b) in before
+            .points_by_return
+            .iter_mut()
+            .zip(&prev.points_by_return)
+        {
+            *a = *b;
+        }
+        start = prev.next_pulse.unwrap_or_default();
+        wall_before = prev.wall_time_s;
+    }
     let sim = Simulator::new(survey, &bvh).with_waveforms(formats.las_waveform);
     let timer = Timer::start();
     let mut refs: Vec<&mut (dyn PointSink + 'static)> =
         sinks.iter_mut().map(|b| b.as_mut()).collect();
     refs.push(&mut report);
-    let result = sim.run(options.threads, &mut refs, options.progress);
+    let done_before = before.pulses;
+    let progress = |n: u64| (options.progress)(done_before + n);
+    let control = RunControl {
+        start,
+        stop: options.stop,
+        pulse_budget: options.pulse_budget,
+    };
+    let result = sim.run_from(options.threads, &mut refs, &progress, &control);
     drop(refs);
-    let counts = match result {
-        Ok(c) => c,
+    let outcome = match result {
+        Ok(o) => o,
         Err(e) => {
             for s in sinks {
                 s.discard();
             }
-            return Err(io_err(out_dir)(e));
+            return Err(run_error(out_dir, e));
         }
     };
+    let mut counts = before;
+    counts.add(&outcome.counts);
     for s in sinks {
-        s.finish().map_err(io_err(out_dir))?;
+        s.finish().map_err(|e| run_error(out_dir, e))?;
     }
-    let wall_time_s = timer.seconds();
+    let wall_time_s = wall_before + timer.seconds();
+
+    if let Some(next) = outcome.stopped_at {
+        // Interrupted: every point file is finished for the pulses before
+        // `next`; keep what the report gathered and say where to go on.
+        let mut bytes = BTreeMap::new();
+        for (name, wanted) in point_files {
+            if wanted {
+                let path = out_dir.join(name);
+                let len = std::fs::metadata(&path).map_err(io_err(&path))?.len();
+                bytes.insert(name.to_string(), len);
+            }
+        }
+        let mut state = Vec::new();
+        report.save(&mut state).map_err(io_err(&state_path))?;
+        write_atomic(&state_path, &state).map_err(io_err(&state_path))?;
+        files.push(REPORT_STATE.to_string());
+        files.push("summary.json".to_string());
+        let mut summary = summarize(
+            survey,
+            &counts,
+            options.threads,
+            wall_time_s,
+            index_time_s,
+            plan,
+            files,
+            bvh.scene().primitives.len(),
+        );
+        summary.warnings.extend(scene_warnings);
+        summary.complete = false;
+        summary.next_pulse = Some(next);
+        summary.point_file_bytes = Some(bytes);
+        let json =
+            serde_json::to_vec_pretty(&summary).map_err(|e| io_err(&summary_path)(e.into()))?;
+        write_atomic(&summary_path, &json).map_err(io_err(&summary_path))?;
+        return Ok(summary);
+    }
+
     files.push("report.html".to_string());
     files.push("summary.json".to_string());
     let summary = summarize(
@@ -225,6 +473,8 @@ pub fn run_to_dir(
         files,
         bvh.scene().primitives.len(),
     );
+    let mut summary = summary;
+    summary.warnings.extend(scene_warnings);
     // The report, with the waveforms of a pulse with the most echoes and of
     // a single-echo pulse, simulated again.
     let mut waveforms = Vec::new();
@@ -249,6 +499,10 @@ pub fn run_to_dir(
 
     let json = serde_json::to_vec_pretty(&summary).map_err(|e| io_err(&summary_path)(e.into()))?;
     write_atomic(&summary_path, &json).map_err(io_err(&summary_path))?;
+    match std::fs::remove_file(&state_path) {
+        Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(io_err(&state_path)(e)),
+        _ => {}
+    }
     Ok(summary)
 }
 
@@ -271,6 +525,8 @@ fn summarize(
     Summary {
         lidarsim_version: env!("CARGO_PKG_VERSION"),
         complete: true,
+        next_pulse: None,
+        point_file_bytes: None,
         seed: survey.seed,
         threads,
         pulses: counts.pulses,

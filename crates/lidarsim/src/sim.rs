@@ -10,6 +10,7 @@
 //! does not grow with the length of the flight.
 
 use std::io;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc;
 use std::time::Instant;
 
@@ -56,7 +57,8 @@ pub struct RunCounts {
 }
 
 impl RunCounts {
-    fn add(&mut self, o: &RunCounts) {
+    /// Adds the counts of `o`.
+    pub fn add(&mut self, o: &RunCounts) {
         self.pulses += o.pulses;
         self.points += o.points;
         self.pulses_with_echo += o.pulses_with_echo;
@@ -480,13 +482,30 @@ impl<'a> Simulator<'a> {
         sinks: &mut [&mut (dyn PointSink + 'static)],
         progress: &(dyn Fn(u64) + Sync),
     ) -> io::Result<RunCounts> {
+        self.run_from(threads, sinks, progress, &RunControl::default())
+            .map(|o| o.counts)
+    }
+
+    /// [`Simulator::run`] from `control.start` on, stopping at the next
+    /// block boundary once `control.stop` is set (checked before every
+    /// batch of blocks; the blocks already simulated are written first).
+    /// The counts are those of the pulses simulated by this call; the
+    /// outcome says where it stopped, if it did.
+    pub fn run_from(
+        &self,
+        threads: usize,
+        sinks: &mut [&mut (dyn PointSink + 'static)],
+        progress: &(dyn Fn(u64) + Sync),
+        control: &RunControl<'_>,
+    ) -> io::Result<RunOutcome> {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads.max(1))
             .build()
             .map_err(io::Error::other)?;
-        let batch_blocks = 4 * threads.max(1) as u64;
+        let batch_pulses = 4 * threads.max(1) as u64 * BLOCK_PULSES;
         type Block = (Vec<PointRecord>, RunCounts, WaveformBlock);
         let (tx, rx) = mpsc::sync_channel::<Vec<Block>>(2);
+        let stopped = |stop: Option<&AtomicBool>| stop.is_some_and(|s| s.load(Ordering::SeqCst));
         std::thread::scope(|scope| {
             let writer = scope.spawn(move || -> io::Result<RunCounts> {
                 let mut total = RunCounts::default();
@@ -502,17 +521,35 @@ impl<'a> Simulator<'a> {
                 Ok(total)
             });
             let mut send_failed = false;
-            'lines: for line in &self.survey.lines {
+            let mut stopped_at = None;
+            let mut sent = 0u64;
+            'lines: for (l, line) in self
+                .survey
+                .lines
+                .iter()
+                .enumerate()
+                .skip(control.start.line)
+            {
                 let n = self.survey.pulses_of(line);
-                let blocks = n.div_ceil(BLOCK_PULSES);
-                let mut b = 0;
-                while b < blocks {
-                    let b1 = (b + batch_blocks).min(blocks);
+                let mut k = if l == control.start.line {
+                    control.start.pulse.min(n)
+                } else {
+                    0
+                };
+                while k < n {
+                    let left = control.pulse_budget.map(|b| b.saturating_sub(sent));
+                    if stopped(control.stop) || left == Some(0) {
+                        stopped_at = Some(PulsePosition { line: l, pulse: k });
+                        break 'lines;
+                    }
+                    // Within the budget, rounded up to whole blocks.
+                    let room = left.map_or(u64::MAX, |p| p.div_ceil(BLOCK_PULSES) * BLOCK_PULSES);
+                    let k_end = (k + batch_pulses.min(room)).min(n);
+                    let starts: Vec<u64> = (k..k_end).step_by(BLOCK_PULSES as usize).collect();
                     let batch: Vec<_> = pool.install(|| {
-                        (b..b1)
+                        starts
                             .into_par_iter()
-                            .map_init(Scratch::default, |scratch, blk| {
-                                let k0 = blk * BLOCK_PULSES;
+                            .map_init(Scratch::default, |scratch, k0| {
                                 let k1 = (k0 + BLOCK_PULSES).min(n);
                                 let mut waves = WaveformBlock::default();
                                 let record = self.record_waveforms.then_some(&mut waves);
@@ -526,9 +563,12 @@ impl<'a> Simulator<'a> {
                         send_failed = true;
                         break 'lines;
                     }
-                    b = b1;
+                    sent += k_end - k;
+                    k = k_end;
                 }
             }
+            // A stop requested after the last batch changes nothing: the
+            // run is complete.
             drop(tx);
             let result = writer
                 .join()
@@ -536,9 +576,40 @@ impl<'a> Simulator<'a> {
             if send_failed && result.is_ok() {
                 return Err(io::Error::other("the writer thread stopped early"));
             }
-            result
+            result.map(|counts| RunOutcome { counts, stopped_at })
         })
     }
+}
+
+/// A pulse of a survey: flight line (0-based index) and pulse within it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct PulsePosition {
+    /// Index of the flight line (0 = first).
+    pub line: usize,
+    /// Pulse index within the line.
+    pub pulse: u64,
+}
+
+/// Where [`Simulator::run_from`] starts and what makes it stop early.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunControl<'a> {
+    /// First pulse to simulate (the pulses before it are skipped).
+    pub start: PulsePosition,
+    /// Set (by a signal handler, say) to stop at the next block boundary.
+    pub stop: Option<&'a AtomicBool>,
+    /// Stop once this many pulses were simulated, rounded up to a whole
+    /// block (at the end of a line, where the line ends): a run in slices.
+    pub pulse_budget: Option<u64>,
+}
+
+/// What [`Simulator::run_from`] did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RunOutcome {
+    /// Counts of the pulses simulated by this call.
+    pub counts: RunCounts,
+    /// The first pulse not simulated when the run was stopped early; `None`
+    /// when it reached the end of the survey.
+    pub stopped_at: Option<PulsePosition>,
 }
 
 /// Simulates a whole survey into memory on `threads` threads: a BVH over

@@ -22,10 +22,7 @@ fn run_flat(extra: &str, name: &str, threads: usize) -> (PathBuf, lidarsim::run:
     let summary = run_to_dir(
         &flat_survey(extra),
         &dir,
-        &RunOptions {
-            threads,
-            progress: &|_| {},
-        },
+        &RunOptions::new(threads, &|_| {}),
     )
     .unwrap();
     (dir, summary)

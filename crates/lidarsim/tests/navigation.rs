@@ -246,15 +246,7 @@ fn boresight_error_shows_as_a_strip_discrepancy_on_a_roof() {
 fn run_dir(s: &Survey, name: &str) -> std::path::PathBuf {
     let dir = std::env::temp_dir().join(format!("lidarsim-nav-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    lidarsim::run::run_to_dir(
-        s,
-        &dir,
-        &lidarsim::run::RunOptions {
-            threads: 2,
-            progress: &|_| {},
-        },
-    )
-    .unwrap();
+    lidarsim::run::run_to_dir(s, &dir, &lidarsim::run::RunOptions::new(2, &|_| {})).unwrap();
     dir
 }
 

@@ -63,15 +63,7 @@ vertices_m = [[-100, -100, 0], [100, -100, 0], [100, 100, 0], [-100, 100, 0]]
 fn run(text: &str, name: &str) -> (PathBuf, lidarsim::run::Summary) {
     let dir = out_dir(name);
     let survey = Survey::from_toml(text, None).unwrap();
-    let summary = run_to_dir(
-        &survey,
-        &dir,
-        &RunOptions {
-            threads: 2,
-            progress: &|_| {},
-        },
-    )
-    .unwrap();
+    let summary = run_to_dir(&survey, &dir, &RunOptions::new(2, &|_| {})).unwrap();
     (dir, summary)
 }
 

@@ -19,7 +19,7 @@ use std::path::{Path, PathBuf};
 
 use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
 
-use super::{AtomicFile, PointRecord, PointSink, WaveformBlock};
+use super::{AtomicFile, PointRecord, PointSink, WaveformBlock, file_error};
 use crate::geometry::SPEED_OF_LIGHT_MPS;
 
 /// Size of a point data record of format 6, bytes.
@@ -277,14 +277,107 @@ impl LasWriter {
         };
         let header = w.header();
         let vlrs = w.vlrs()?;
-        w.file.writer().write_all(&header)?;
-        w.file.writer().write_all(&vlrs)?;
+        let named = |e| file_error(path, e);
+        w.file.writer().write_all(&header).map_err(named)?;
+        w.file.writer().write_all(&vlrs).map_err(named)?;
         if w.settings.compressed {
             let writer = w.file.take_writer();
             let compressor =
                 LasZipCompressor::new(writer, w.laz_vlr()?).map_err(io::Error::other)?;
             w.body = Body::Laz(Box::new(compressor));
         }
+        Ok(w)
+    }
+
+    /// Continues `path`, a file this writer finished when a run was
+    /// interrupted: the point counts, counts by return, bounds and creation
+    /// date are taken from its header, which must match `settings`
+    /// (scale, offset, record layout), and points are appended after the
+    /// `len` bytes the file had then.
+    pub fn resume(path: &Path, mut settings: LasSettings, len: u64) -> io::Result<Self> {
+        let bad = |what: String| {
+            file_error(
+                path,
+                io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    format!("cannot continue this file: {what}"),
+                ),
+            )
+        };
+        let mut h = [0u8; HEADER_SIZE as usize];
+        // The file as the interrupted run finished it, or as a failed
+        // resume left it.
+        let partial = AtomicFile::partial_of(path);
+        let current = if path.exists() || !partial.exists() {
+            path
+        } else {
+            &partial
+        };
+        std::fs::File::open(current)
+            .and_then(|mut f| io::Read::read_exact(&mut f, &mut h))
+            .map_err(|e| file_error(path, e))?;
+        let u16_at = |o: usize| u16::from_le_bytes([h[o], h[o + 1]]);
+        let u32_at = |o: usize| u32::from_le_bytes([h[o], h[o + 1], h[o + 2], h[o + 3]]);
+        let u64_at = |o: usize| {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(&h[o..o + 8]);
+            u64::from_le_bytes(b)
+        };
+        let f64_at = |o: usize| f64::from_bits(u64_at(o));
+        if settings.compressed || settings.waveform.is_some() {
+            return Err(bad(
+                "LAZ and full-waveform files cannot be continued; run the survey again".into(),
+            ));
+        }
+        if &h[0..4] != b"LASF" || h[24..26] != [1, 4] || h[104] != 6 {
+            return Err(bad("not a LAS 1.4 file of point format 6".into()));
+        }
+        settings.creation_day_year = (u16_at(90), u16_at(92));
+        let mut w = Self {
+            file: AtomicFile::unopened(path),
+            settings,
+            body: Body::Plain,
+            wdp: None,
+            count: u64_at(247),
+            by_return: [0; 15],
+            min: [i32::MAX; 3],
+            max: [i32::MIN; 3],
+            buf: Vec::with_capacity(1 << 16),
+        };
+        for (i, n) in w.by_return.iter_mut().enumerate() {
+            *n = u64_at(255 + 8 * i);
+        }
+        let s = &w.settings;
+        let offset_to_points = u64::from(HEADER_SIZE) + w.vlrs()?.len() as u64;
+        if u16_at(105) != w.record_len()
+            || u64::from(u32_at(96)) != offset_to_points
+            || (0..3)
+                .any(|a| f64_at(131 + 8 * a) != s.scale_m || f64_at(155 + 8 * a) != s.offset_m[a])
+        {
+            return Err(bad(
+                "its record layout, scale or offset differ from the survey's".into(),
+            ));
+        }
+        let expected = w
+            .count
+            .checked_mul(u64::from(w.record_len()))
+            .and_then(|b| b.checked_add(offset_to_points));
+        if expected != Some(len) {
+            return Err(bad(format!(
+                "its header counts {} points but {len} bytes were recorded",
+                w.count
+            )));
+        }
+        if w.count > 0 {
+            for a in 0..3 {
+                // Header bounds are integers × scale + offset: exact inverse.
+                let (max, min) = (f64_at(179 + 16 * a), f64_at(187 + 16 * a));
+                w.max[a] = w.quantize(max, a).map_err(|e| bad(e.to_string()))?;
+                w.min[a] = w.quantize(min, a).map_err(|e| bad(e.to_string()))?;
+            }
+        }
+        // Only now, with everything checked, is the file touched.
+        w.file = AtomicFile::reopen(path, len)?;
         Ok(w)
     }
 
@@ -579,10 +672,11 @@ impl LasWriter {
             self.count += 1;
             self.by_return[usize::from(rn) - 1] += 1;
         }
-        match &mut self.body {
+        let r = match &mut self.body {
             Body::Plain => self.file.writer().write_all(&self.buf),
             Body::Laz(c) => c.compress_many(&self.buf),
-        }
+        };
+        r.map_err(|e| self.file.error(e))
     }
 }
 
@@ -708,14 +802,18 @@ impl PointSink for LasWriter {
 
     fn finish(mut self: Box<Self>) -> io::Result<()> {
         if let Body::Laz(mut c) = std::mem::replace(&mut self.body, Body::Plain) {
-            c.done()?;
+            c.done().map_err(|e| self.file.error(e))?;
             self.file.put_writer(c.into_inner());
         }
         let header = self.header();
         let w = self.file.writer();
-        w.flush()?;
-        w.seek(SeekFrom::Start(0))?;
-        w.write_all(&header)?;
+        let r = w
+            .flush()
+            .and_then(|()| w.seek(SeekFrom::Start(0)))
+            .and_then(|_| w.write_all(&header));
+        if let Err(e) = r {
+            return Err(self.file.error(e));
+        }
         if let Some(wdp) = self.wdp.take()
             && let Some(mut file) = wdp.file
         {

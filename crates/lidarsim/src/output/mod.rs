@@ -21,7 +21,7 @@ pub use ply::{PLY_PROPERTIES, PLY_RECORD_LEN, PlyWriter};
 pub use xyz::XyzWriter;
 
 use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use crate::geometry::DVec3;
@@ -162,6 +162,8 @@ pub struct AtomicFile {
     partial: PathBuf,
     target: PathBuf,
     committed: bool,
+    /// A reopened file is not removed when dropped uncommitted.
+    keep_on_drop: bool,
 }
 
 impl AtomicFile {
@@ -187,7 +189,79 @@ impl AtomicFile {
             partial,
             target: target.to_path_buf(),
             committed: false,
+            keep_on_drop: false,
         })
+    }
+
+    /// Continues a file that an interrupted run finished early: `target`
+    /// is renamed back to `target.partial` (or `target.partial` is taken as
+    /// it is, left by a resumed run that failed), cut to `len` bytes and
+    /// opened for writing at its end. Dropped uncommitted, the partial file
+    /// is kept, so that the run can be resumed again.
+    pub fn reopen(target: &Path, len: u64) -> io::Result<Self> {
+        let partial = Self::partial_of(target);
+        let named = |e: io::Error| file_error(target, e);
+        let current = if !partial.exists() || target.exists() {
+            target
+        } else {
+            &partial
+        };
+        let have = std::fs::metadata(current).map_err(named)?.len();
+        if have < len {
+            return Err(named(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "cannot continue this file: it has {have} bytes, fewer than the {len} \
+                     the interrupted run wrote"
+                ),
+            )));
+        }
+        if current == target {
+            std::fs::rename(target, &partial).map_err(named)?;
+        }
+        let mut file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&partial)
+            .map_err(named)?;
+        file.set_len(len).map_err(named)?;
+        file.seek(SeekFrom::End(0)).map_err(named)?;
+        Ok(Self {
+            writer: Some(BufWriter::with_capacity(1 << 20, file)),
+            partial,
+            target: target.to_path_buf(),
+            committed: false,
+            keep_on_drop: true,
+        })
+    }
+
+    /// A handle on no file yet (for a writer under construction): it must
+    /// be replaced before it is written; dropping it does nothing.
+    pub(crate) fn unopened(target: &Path) -> Self {
+        Self {
+            writer: None,
+            partial: Self::partial_of(target),
+            target: target.to_path_buf(),
+            committed: false,
+            keep_on_drop: true,
+        }
+    }
+
+    /// `target.partial`.
+    pub fn partial_of(target: &Path) -> PathBuf {
+        let mut partial = target.as_os_str().to_owned();
+        partial.push(".partial");
+        PathBuf::from(partial)
+    }
+
+    /// The final name of the file.
+    pub fn path(&self) -> &Path {
+        &self.target
+    }
+
+    /// `e` as an error that names this file.
+    pub fn error(&self, e: io::Error) -> io::Error {
+        file_error(&self.target, e)
     }
 
     /// The buffered writer.
@@ -207,21 +281,64 @@ impl AtomicFile {
         self.writer = Some(writer);
     }
 
-    /// Flushes, syncs and renames to the final name.
+    /// Flushes, syncs and renames to the final name. Errors name the file.
     pub fn commit(mut self) -> io::Result<()> {
+        let target = self.target.clone();
+        let named = |e: io::Error| file_error(&target, e);
         let w = self.writer.take().expect("writer present until commit");
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
+        let file = match w.into_inner() {
+            Ok(f) => f,
+            Err(e) => {
+                if !self.keep_on_drop {
+                    let _ = std::fs::remove_file(&self.partial);
+                }
+                return Err(named(e.into_error()));
+            }
+        };
+        if let Err(e) = file.sync_all() {
+            drop(file);
+            if !self.keep_on_drop {
+                let _ = std::fs::remove_file(&self.partial);
+            }
+            return Err(named(e));
+        }
         drop(file);
-        std::fs::rename(&self.partial, &self.target)?;
+        std::fs::rename(&self.partial, &self.target).map_err(named)?;
         self.committed = true;
         Ok(())
     }
 }
 
+/// An I/O error on a named file (carried inside an [`io::Error`], so that
+/// whoever reports it can name the file: see [`file_error`]).
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct FileError {
+    /// The file.
+    pub path: PathBuf,
+    /// What went wrong.
+    #[source]
+    pub source: io::Error,
+}
+
+/// Wraps `e` into an [`io::Error`] of the same kind holding a [`FileError`]
+/// for `path` (an error that already names a file is returned unchanged).
+pub fn file_error(path: &Path, e: io::Error) -> io::Error {
+    if e.get_ref().is_some_and(|i| i.is::<FileError>()) {
+        return e;
+    }
+    io::Error::new(
+        e.kind(),
+        FileError {
+            path: path.to_path_buf(),
+            source: e,
+        },
+    )
+}
+
 impl Drop for AtomicFile {
     fn drop(&mut self) {
-        if !self.committed {
+        if !self.committed && !self.keep_on_drop {
             drop(self.writer.take());
             let _ = std::fs::remove_file(&self.partial);
         }

@@ -24,9 +24,19 @@ impl XyzWriter {
     /// header line; `origin_m` is added to every position.
     pub fn create(path: &Path, origin_m: [f64; 3]) -> io::Result<Self> {
         let mut file = AtomicFile::create(path)?;
-        writeln!(file.writer(), "{XYZ_COLUMNS}")?;
+        writeln!(file.writer(), "{XYZ_COLUMNS}").map_err(|e| file.error(e))?;
         Ok(Self {
             file,
+            origin_m,
+            line: String::with_capacity(256),
+        })
+    }
+
+    /// Continues `path`, finished early by an interrupted run when it held
+    /// `len` bytes: points are appended after them.
+    pub fn resume(path: &Path, len: u64, origin_m: [f64; 3]) -> io::Result<Self> {
+        Ok(Self {
+            file: AtomicFile::reopen(path, len)?,
             origin_m,
             line: String::with_capacity(256),
         })
@@ -58,7 +68,9 @@ impl PointSink for XyzWriter {
                 p.range_m,
                 p.component
             );
-            self.file.writer().write_all(self.line.as_bytes())?;
+            if let Err(e) = self.file.writer().write_all(self.line.as_bytes()) {
+                return Err(self.file.error(e));
+            }
         }
         Ok(())
     }

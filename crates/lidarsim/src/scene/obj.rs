@@ -90,6 +90,58 @@ pub enum MeshError {
 }
 
 /// Name of the pseudo material library holding the survey's materials.
+/// The first line of an OBJ text that cannot be read, and why: bytes that
+/// are not UTF-8, a vertex without three numbers, a face corner that is not
+/// an index of a vertex defined before it (OBJ indices start at 1; negative
+/// ones count back from the last vertex). The OBJ parser names no line, so
+/// this finds it for the message.
+pub fn first_bad_line(text: &[u8]) -> Option<(usize, String)> {
+    let mut vertices: i64 = 0;
+    for (i, raw) in text.split(|&b| b == b'\n').enumerate() {
+        let n = i + 1;
+        let Ok(line) = std::str::from_utf8(raw) else {
+            return Some((n, "not valid UTF-8".to_string()));
+        };
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("v") => {
+                let numbers = words.take(3).filter(|w| w.parse::<f64>().is_ok()).count();
+                if numbers < 3 {
+                    return Some((
+                        n,
+                        format!("vertex '{}' needs three numbers x y z", line.trim()),
+                    ));
+                }
+                vertices += 1;
+            }
+            Some("f") => {
+                for w in words {
+                    let index = w.split('/').next().unwrap_or("");
+                    let Ok(k) = index.parse::<i64>() else {
+                        return Some((
+                            n,
+                            format!("face corner '{w}' is not a vertex index (or too large)"),
+                        ));
+                    };
+                    if k == 0 {
+                        return Some((n, "face corner 0: OBJ indices start at 1".to_string()));
+                    }
+                    if k > vertices || -k > vertices {
+                        return Some((
+                            n,
+                            format!(
+                                "face corner {k} refers to no vertex ({vertices} defined so far)"
+                            ),
+                        ));
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
 const SURVEY_LIBRARY: &str = "<survey materials>";
 
 /// Where a mesh goes in the world and what it defaults to.
@@ -186,7 +238,10 @@ pub fn load_obj(
     })
     .map_err(|e| MeshError::Parse {
         path: path.to_path_buf(),
-        reason: e.to_string(),
+        reason: match first_bad_line(&text) {
+            Some((line, why)) => format!("line {line}: {why}"),
+            None => e.to_string(),
+        },
     })?;
     let mtl_materials = materials.unwrap_or_default();
 
@@ -235,7 +290,13 @@ pub fn load_obj(
     for model in &models {
         let mesh = &model.mesh;
         let (material, class_hint) = match mesh.material_id {
-            Some(id) => resolved[id],
+            Some(id) => *resolved.get(id).ok_or_else(|| MeshError::Parse {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "object '{}' uses a material that was not loaded",
+                    model.name
+                ),
+            })?,
             None => match default_material {
                 Some(m) => (m, None),
                 None if mesh.indices.is_empty() => continue,

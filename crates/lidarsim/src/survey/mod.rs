@@ -14,6 +14,7 @@ pub use raw::RawSurvey;
 
 use std::collections::HashMap;
 use std::fmt;
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::canopy::CanopyConfig;
@@ -28,6 +29,17 @@ use crate::scene::{
     load_obj,
 };
 use crate::waveform::{PulseShape, ReceiverConfig};
+
+/// Highest pulse repetition frequency accepted, Hz.
+pub const MAX_PRF_HZ: f64 = 1e7;
+
+/// Longest flight line accepted, hours (no airborne line lasts a day; the
+/// limit keeps pulse counts and per-line error series finite).
+pub const MAX_LINE_HOURS: f64 = 24.0;
+
+/// Largest coordinate magnitude accepted, m (beyond any projected
+/// coordinate system; the BVH keeps f32 boxes relative to the scene).
+pub const MAX_COORDINATE_M: f64 = 1e8;
 
 /// Seed used when the survey names none.
 pub const DEFAULT_SEED: u64 = 1;
@@ -47,26 +59,70 @@ pub struct Diagnostic {
     pub message: String,
     /// The offending line of the file.
     pub source_line: Option<String>,
+    /// Characters to underline from `column` on (at least 1).
+    pub width: usize,
+    /// A hint, when one is obvious ("did you mean `prf_hz`?").
+    pub help: Option<String>,
 }
 
+impl Diagnostic {
+    /// A problem with the whole file (unreadable, not UTF-8), at `line` if
+    /// known (0 otherwise).
+    pub fn file_level(file: &str, line: usize, message: String) -> Self {
+        Self {
+            file: file.to_string(),
+            line,
+            column: 0,
+            key: String::new(),
+            message,
+            source_line: None,
+            width: 1,
+            help: None,
+        }
+    }
+}
+
+/// Rendered like the diagnostics of rustc and miette, without colours:
+///
+/// ```text
+/// key `flight_line[0].speed_mps`: must be greater than 0 m/s, got -3
+///   --> survey.toml:11:13
+///    |
+/// 11 | speed_mps = -3
+///    |             ^^
+///    = help: …
+/// ```
 impl fmt::Display for Diagnostic {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.file)?;
-        if self.line > 0 {
-            write!(f, ":{}:{}", self.line, self.column)?;
-        }
         if self.key.is_empty() {
-            write!(f, ": {}", self.message)?;
+            write!(f, "{}", self.message)?;
         } else {
-            write!(f, ": key `{}`: {}", self.key, self.message)?;
+            write!(f, "key `{}`: {}", self.key, self.message)?;
+        }
+        let gutter = " ".repeat(self.line.max(1).to_string().len());
+        write!(f, "\n{gutter}--> {}", self.file)?;
+        if self.line > 0 {
+            write!(f, ":{}", self.line)?;
+            if self.column > 0 {
+                write!(f, ":{}", self.column)?;
+            }
         }
         if let Some(src) = &self.source_line {
-            let gutter = self.line.to_string();
-            write!(f, "\n {gutter} | {src}")?;
+            let src = src.trim_end();
+            write!(f, "\n{gutter} |\n{} | {src}", self.line)?;
             if self.column > 0 {
-                let pad = " ".repeat(gutter.len());
-                write!(f, "\n {pad} | {}^", " ".repeat(self.column - 1))?;
+                let shown = src.chars().count();
+                let width = self.width.min(shown.saturating_sub(self.column - 1)).max(1);
+                write!(
+                    f,
+                    "\n{gutter} | {}{}",
+                    " ".repeat(self.column - 1),
+                    "^".repeat(width)
+                )?;
             }
+        }
+        if let Some(help) = &self.help {
+            write!(f, "\n{gutter} = help: {help}")?;
         }
         Ok(())
     }
@@ -192,25 +248,101 @@ pub struct Survey {
     pub source: Option<PathBuf>,
 }
 
-/// Adds "did you mean" to an unknown-field message when one of the
-/// expected names is within two edits of the one given.
-fn with_hint(message: &str) -> String {
-    let Some(rest) = message.strip_prefix("unknown field `") else {
-        return message.to_string();
-    };
-    let Some((given, expected)) = rest.split_once('`') else {
-        return message.to_string();
-    };
-    let best = expected
-        .split('`')
-        .skip(1)
-        .step_by(2)
-        .map(|name| (edit_distance(given, name), name))
-        .min();
-    match best {
-        Some((d, name)) if d <= 2 => format!("{message} (did you mean `{name}`?)"),
-        _ => message.to_string(),
+/// Splits a serde message into what the user reads and a hint: an unknown
+/// field gets "did you mean" when one of the expected names is within two
+/// edits of the one given (otherwise the list of valid names); Rust type
+/// names become TOML words.
+fn explain(message: &str) -> (String, Option<String>) {
+    let message = message.trim();
+    if let Some(rest) = message.strip_prefix("unknown field `")
+        && let Some((given, expected)) = rest.split_once('`')
+    {
+        let names: Vec<&str> = expected.split('`').skip(1).step_by(2).collect();
+        let best = names
+            .iter()
+            .map(|name| (edit_distance(given, name), *name))
+            .min();
+        let help = match best {
+            Some((d, name)) if d <= 2 => format!("did you mean `{name}`?"),
+            _ if names.is_empty() => "this table takes no keys".to_string(),
+            _ => format!("valid keys here: {}", names.join(", ")),
+        };
+        return (format!("unknown field `{given}`"), Some(help));
     }
+    let mut m = message.to_string();
+    for (rust, toml) in [
+        ("expected f64", "expected a number"),
+        ("expected u64", "expected a non-negative integer"),
+        ("expected i64", "expected an integer"),
+        ("expected a sequence", "expected an array"),
+        ("expected a boolean", "expected true or false"),
+    ] {
+        m = m.replace(rust, toml);
+    }
+    if let Some(at) = m.find("expected struct Raw") {
+        m.replace_range(at.., "expected a table");
+    }
+    if let Some(rest) = m.strip_prefix("invalid type: integer `")
+        && let Some((n, _)) = rest.split_once("` as i128")
+    {
+        m = format!(
+            "integer {n} is too large: TOML integers are 64-bit (up to 9223372036854775807)"
+        );
+    }
+    if m.contains("did not match any variant of untagged enum NumberOrList") {
+        m = "expected a number or an array of numbers".to_string();
+    }
+    (m, None)
+}
+
+/// The error of `diagnostics` sorted by line (those without a line last).
+fn diagnostics_in_file_order(mut diagnostics: Vec<Diagnostic>) -> SurveyError {
+    diagnostics.sort_by_key(|d| if d.line == 0 { usize::MAX } else { d.line });
+    SurveyError { diagnostics }
+}
+
+/// Most problems of structure (unknown keys, wrong types) collected before
+/// giving up on a file.
+const MAX_READ_PROBLEMS: usize = 100;
+
+/// Our key path of a serde path.
+fn key_path_of(path: &serde_path_to_error::Path) -> KeyPath {
+    use serde_path_to_error::Segment;
+    let mut k = KeyPath::root();
+    for seg in path.iter() {
+        k = match seg {
+            Segment::Map { key } => k.key(key),
+            Segment::Seq { index } => k.index(*index),
+            Segment::Enum { .. } | Segment::Unknown => k,
+        };
+    }
+    k
+}
+
+/// Removes the table key nearest to the end of `path` (the whole key of an
+/// array element) and returns its path, or `None` when there is none.
+fn remove_key(table: &mut toml::Table, path: &KeyPath) -> Option<KeyPath> {
+    let last = path.0.iter().rposition(|s| matches!(s, Seg::Key(_)))?;
+    let Seg::Key(name) = &path.0[last] else {
+        return None;
+    };
+    let mut t = table;
+    let mut segs = &path.0[..last];
+    while let Some((Seg::Key(k), rest)) = segs.split_first() {
+        let mut v = t.get_mut(k)?;
+        let mut rest = rest;
+        while let Some((Seg::Index(i), r)) = rest.split_first() {
+            v = v.as_array_mut()?.get_mut(*i)?;
+            rest = r;
+        }
+        t = v.as_table_mut()?;
+        segs = rest;
+    }
+    if !segs.is_empty() {
+        return None;
+    }
+    t.remove(name)?;
+    Some(KeyPath(path.0[..=last].to_vec()))
 }
 
 /// Levenshtein distance between two short strings.
@@ -297,6 +429,13 @@ impl Checker {
             }
             Some(v) if v.iter().any(|x| !x.is_finite()) => {
                 self.err(path, "must hold finite numbers");
+                None
+            }
+            Some(v) if v.iter().any(|x| x.abs() > MAX_COORDINATE_M) => {
+                self.err(
+                    path,
+                    format!("coordinates must lie within ±{MAX_COORDINATE_M:e} m, got {v:?}"),
+                );
                 None
             }
             Some(v) => Some(DVec3::new(v[0], v[1], v[2])),
@@ -973,28 +1112,22 @@ impl Survey {
     pub fn load_with_seed(path: &Path, seed: Option<u64>) -> Result<Self, SurveyError> {
         let file = path.display().to_string();
         let text = std::fs::read(path).map_err(|e| SurveyError {
-            diagnostics: vec![Diagnostic {
-                file: file.clone(),
-                line: 0,
-                column: 0,
-                key: String::new(),
-                message: format!("cannot read the survey file: {e}"),
-                source_line: None,
-            }],
+            diagnostics: vec![Diagnostic::file_level(
+                &file,
+                0,
+                format!("cannot read the survey file: {e}"),
+            )],
         })?;
         let text = String::from_utf8(text).map_err(|e| {
             let offset = e.utf8_error().valid_up_to();
             let prefix = String::from_utf8_lossy(&e.as_bytes()[..offset]).into_owned();
             let line = prefix.matches('\n').count() + 1;
             SurveyError {
-                diagnostics: vec![Diagnostic {
-                    file: file.clone(),
+                diagnostics: vec![Diagnostic::file_level(
+                    &file,
                     line,
-                    column: 0,
-                    key: String::new(),
-                    message: format!("the file is not valid UTF-8 (byte {offset})"),
-                    source_line: None,
-                }],
+                    format!("the file is not valid UTF-8 (byte {offset}): save it as UTF-8"),
+                )],
             }
         })?;
         Self::from_toml_with_seed(&text, Some(path), seed)
@@ -1007,6 +1140,12 @@ impl Survey {
     }
 
     /// [`Survey::from_toml`] with the seed replaced by `seed` if given.
+    ///
+    /// Every problem is reported at once: unknown keys and values of the
+    /// wrong type anywhere in the file (each offending key is set aside and
+    /// the rest read again), then the validation of everything else. Only
+    /// a TOML syntax error stops at once, since nothing after it can be
+    /// trusted.
     pub fn from_toml_with_seed(
         text: &str,
         path: Option<&Path>,
@@ -1014,61 +1153,79 @@ impl Survey {
     ) -> Result<Self, SurveyError> {
         let file = path.map_or_else(|| "<survey>".to_string(), |p| p.display().to_string());
         let locator = Locator::new(text);
-        let raw: RawSurvey = toml::from_str(text).map_err(|e| {
-            let mut span = e.span().unwrap_or(0..0);
-            let mut key = locator.path_at(&span);
-            // An unknown key is reported at its table's header: point at
-            // the key itself instead.
-            if let Some(name) = e
-                .message()
-                .strip_prefix("unknown field `")
-                .and_then(|rest| rest.split('`').next())
-            {
-                let candidate = if key.0.last() == Some(&Seg::Key(name.to_string())) {
-                    key.clone()
-                } else {
-                    key.key(name)
-                };
-                if let Some(s) = locator.key_span_of(&candidate) {
-                    span = s;
-                    key = candidate;
-                }
+        let diagnostic = |key: &KeyPath, span: Option<Range<usize>>, message, help| {
+            let (line, column) = span.as_ref().map_or((0, 0), |s| locator.line_col(s.start));
+            let width = span.map_or(1, |s| text[s].chars().take_while(|&c| c != '\n').count());
+            Diagnostic {
+                file: file.clone(),
+                line,
+                column,
+                key: key.to_string(),
+                message,
+                source_line: (line > 0).then(|| locator.line_text(line).to_string()),
+                width: width.max(1),
+                help,
             }
-            let key = key.to_string();
-            let (line, column) = locator.line_col(span.start);
+        };
+        let mut table: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+            let span = e.span().unwrap_or(0..0);
+            let key = locator.path_at(&span);
+            let (message, help) = explain(e.message());
             SurveyError {
-                diagnostics: vec![Diagnostic {
-                    file: file.clone(),
-                    line,
-                    column,
-                    key,
-                    message: with_hint(e.message().trim()),
-                    source_line: Some(locator.line_text(line).to_string()),
-                }],
+                diagnostics: vec![diagnostic(&key, Some(span), message, help)],
             }
         })?;
-        let mut raw = raw;
+        // Structure: read, set aside the key that failed, read again.
+        let mut diagnostics = Vec::new();
+        let mut set_aside: Vec<KeyPath> = Vec::new();
+        let raw = loop {
+            let value = toml::Value::Table(table.clone());
+            match serde_path_to_error::deserialize::<_, RawSurvey>(value) {
+                Ok(raw) => break Some(raw),
+                Err(e) => {
+                    let path = key_path_of(e.path());
+                    let (message, help) = explain(e.inner().message());
+                    let span = if help.is_some() {
+                        locator.key_span_of(&path)
+                    } else {
+                        locator.span_of(&path)
+                    };
+                    diagnostics.push(diagnostic(&path, span, message, help));
+                    match remove_key(&mut table, &path) {
+                        Some(removed) if diagnostics.len() < MAX_READ_PROBLEMS => {
+                            set_aside.push(removed)
+                        }
+                        _ => break None,
+                    }
+                }
+            }
+        };
+        let Some(mut raw) = raw else {
+            return Err(SurveyError { diagnostics });
+        };
         if seed.is_some() {
             raw.seed = seed;
         }
-        Self::from_raw(raw, path).map_err(|problems| SurveyError {
-            diagnostics: problems
-                .into_iter()
-                .map(|(key, message)| {
-                    let (line, column) = locator
-                        .span_of(&key)
-                        .map_or((0, 0), |s| locator.line_col(s.start));
-                    Diagnostic {
-                        file: file.clone(),
-                        line,
-                        column,
-                        key: key.to_string(),
-                        message,
-                        source_line: (line > 0).then(|| locator.line_text(line).to_string()),
+        // Validation of what could be read; problems of keys set aside
+        // above were reported already.
+        let related = |p: &KeyPath| {
+            set_aside
+                .iter()
+                .any(|a| p.0.starts_with(&a.0) || a.0.starts_with(&p.0))
+        };
+        match Self::from_raw(raw, path) {
+            Ok(survey) if diagnostics.is_empty() => Ok(survey),
+            Ok(_) => Err(diagnostics_in_file_order(diagnostics)),
+            Err(problems) => {
+                for (key, message) in problems {
+                    if related(&key) {
+                        continue;
                     }
-                })
-                .collect(),
-        })
+                    diagnostics.push(diagnostic(&key, locator.span_of(&key), message, None));
+                }
+                Err(diagnostics_in_file_order(diagnostics))
+            }
+        }
     }
 
     /// Validates a raw survey; on failure returns every problem with its
@@ -1084,15 +1241,37 @@ impl Survey {
         let s = &raw.scanner;
         let sp = root.key("scanner");
         let prf_hz = c.positive(sp.key("prf_hz"), s.prf_hz, 100_000.0, " Hz");
+        if prf_hz > MAX_PRF_HZ {
+            c.err(
+                sp.key("prf_hz"),
+                format!(
+                    "must be at most {MAX_PRF_HZ} Hz (10 MHz, beyond any airborne scanner), \
+                     got {prf_hz:e}"
+                ),
+            );
+        }
         let scan_frequency_hz = c.positive(
             sp.key("scan_frequency_hz"),
             s.scan_frequency_hz,
             50.0,
             " Hz",
         );
+        let scan_angle_given = match s.scan_angle_deg {
+            Some(a) if a >= 90.0 => {
+                c.err(
+                    sp.key("scan_angle_deg"),
+                    format!(
+                        "must be between 0 and 89°, got {a}: at 90° or more from nadir the beam \
+                         points at or above the horizon and meets no ground"
+                    ),
+                );
+                None
+            }
+            other => other,
+        };
         let scan_angle_deg = c.number(
             sp.key("scan_angle_deg"),
-            s.scan_angle_deg,
+            scan_angle_given,
             20.0,
             0.0,
             false,
@@ -1288,6 +1467,17 @@ impl Survey {
                 c.err(
                     lp.key("end_m"),
                     "must differ from start_m: the line has no length",
+                );
+                continue;
+            }
+            let hours = (end - start).length() / speed / 3600.0;
+            if hours > MAX_LINE_HOURS {
+                c.err(
+                    lp.key("end_m"),
+                    format!(
+                        "the line would take {hours:.3e} h at {speed} m/s; a flight line may \
+                         take at most {MAX_LINE_HOURS} h"
+                    ),
                 );
                 continue;
             }
@@ -1737,6 +1927,19 @@ impl Survey {
         let mut lines = Vec::new();
         let mut t = 0.0;
         for (start, end, speed) in straight {
+            let hours = (end - start).length() / speed / 3600.0;
+            if hours.is_nan() || hours > MAX_LINE_HOURS {
+                // Only generated lines get here: [[flight_line]] entries
+                // were checked above.
+                c.err(
+                    root.key("plan"),
+                    format!(
+                        "a generated line would take {hours:.3e} h; a flight line may take at \
+                         most {MAX_LINE_HOURS} h"
+                    ),
+                );
+                break;
+            }
             let index = lines.len() as u32;
             let line = FlightLine {
                 index,
@@ -1757,6 +1960,19 @@ impl Survey {
             let index = lines.len() as u32;
             let (start_m, end_m) = track.ends();
             let duration = track.duration_s();
+            let hours = duration / 3600.0;
+            if hours.is_nan() || hours > MAX_LINE_HOURS || !start_time_s.is_finite() {
+                c.err(
+                    pp.key("trajectory_file"),
+                    format!(
+                        "line {} of the trajectory lasts {:.3e} h; a flight line may take at \
+                         most {MAX_LINE_HOURS} h",
+                        index + 1,
+                        duration / 3600.0
+                    ),
+                );
+                break;
+            }
             lines.push(FlightLine {
                 index,
                 start_m,
@@ -1770,6 +1986,36 @@ impl Survey {
             });
         }
 
+        // Polygons, meshes (after placement) and trees far beyond any
+        // projected coordinate system cannot be traced in the BVH's f32
+        // boxes; say so instead of simulating a scene no pulse can hit.
+        let bounds = scene.bounds();
+        if !bounds.is_empty() {
+            let far = bounds.min.abs().max(bounds.max.abs()).max_element();
+            if far > MAX_COORDINATE_M {
+                let key = raw
+                    .polygons
+                    .iter()
+                    .position(|p| {
+                        p.vertices_m
+                            .iter()
+                            .flatten()
+                            .flatten()
+                            .any(|x| x.abs() > MAX_COORDINATE_M)
+                    })
+                    .map_or_else(KeyPath::root, |i| {
+                        root.key("polygon").index(i).key("vertices_m")
+                    });
+                c.err(
+                    key,
+                    format!(
+                        "the scene reaches {far:e} m from the origin: coordinates must lie \
+                         within ±{MAX_COORDINATE_M:e} m (shift them, e.g. by a mesh's \
+                         offset_m)"
+                    ),
+                );
+            }
+        }
         if scene.primitives.is_empty() && c.problems.is_empty() {
             c.err(
                 root,
@@ -1886,22 +2132,21 @@ vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
         assert_eq!(d[0].line, 5);
         assert!(d[0].message.contains("greater than 0"));
         let text = d[0].to_string();
-        assert!(
-            text.starts_with("s.toml:5:13: key `flight_line[0].speed_mps`"),
-            "{text}"
+        assert_eq!(
+            text,
+            "key `flight_line[0].speed_mps`: must be greater than 0 m/s, got -5\n \
+             --> s.toml:5:13\n  |\n5 | speed_mps = -5.0\n  |             ^^^^"
         );
 
         let unknown = format!("[scanner]\nprff_hz = 3\n{MINIMAL}");
         let d = diagnostics(&unknown);
         assert_eq!(d[0].line, 2);
         assert!(d[0].message.contains("prff_hz"), "{}", d[0].message);
-        assert!(
-            d[0].message.ends_with("(did you mean `prf_hz`?)"),
-            "{}",
-            d[0].message
-        );
+        assert_eq!(d[0].help.as_deref(), Some("did you mean `prf_hz`?"));
+        assert_eq!((d[0].column, d[0].width), (1, 7));
         let far = diagnostics(&format!("[scanner]\nbananas = 3\n{MINIMAL}"));
-        assert!(!far[0].message.contains("did you mean"));
+        let help = far[0].help.as_deref().unwrap();
+        assert!(help.starts_with("valid keys here: prf_hz, "), "{help}");
         assert_eq!(edit_distance("scan_angel_deg", "scan_angle_deg"), 2);
         assert!(d[0].key.contains("scanner"), "{}", d[0].key);
 
@@ -1920,6 +2165,46 @@ vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
             ["scanner.prf_hz", "scanner.subrays", "polygon[0].material"]
         );
         assert!(d[2].message.contains("defined: grass"));
+    }
+
+    #[test]
+    fn unknown_keys_wrong_types_and_ranges_anywhere_are_reported_together() {
+        // Five problems in four tables: two unknown keys, two wrong types
+        // (one inside an array of tables), one value out of range.
+        let text = "[scanner]\nprf_hz = \"fast\"\nscan_angel_deg = 10\nsubrays = 0\n\n\
+                    [[flight_line]]\nstart_m = [0.0, -500.0, 1000.0]\n\
+                    end_m = [0.0, 500.0, \"high\"]\nspeed_mps = 60.0\n\n\
+                    [materials.grass]\nreflectance = 0.4\ncolour = \"green\"\n\n\
+                    [[polygon]]\nmaterial = \"grass\"\nclass = \"ground\"\n\
+                    vertices_m = [[-600, -700, 0], [600, -700, 0], [600, 700, 0]]\n";
+        let d = diagnostics(text);
+        let got: Vec<(usize, usize, &str)> = d
+            .iter()
+            .map(|d| (d.line, d.column, d.key.as_str()))
+            .collect();
+        assert_eq!(
+            got,
+            [
+                (2, 10, "scanner.prf_hz"),
+                (3, 1, "scanner.scan_angel_deg"),
+                (4, 11, "scanner.subrays"),
+                (8, 22, "flight_line[0].end_m[2]"),
+                (13, 1, "materials.grass.colour"),
+            ],
+            "{d:#?}"
+        );
+        assert_eq!(
+            d[0].message,
+            "invalid type: string \"fast\", expected a number"
+        );
+        assert_eq!(d[0].width, 6); // "fast" with its quotes
+        assert_eq!(d[1].help.as_deref(), Some("did you mean `scan_angle_deg`?"));
+        assert!(d[2].message.contains("from 1 to 10000"), "{}", d[2].message);
+        assert!(d[4].help.as_deref().unwrap().contains("reflectance"));
+        // A syntax error stops reading, with its place.
+        let d = diagnostics("[scanner]\nprf_hz = = 3\n");
+        assert_eq!((d.len(), d[0].line), (1, 2), "{d:#?}");
+        assert!(d[0].to_string().contains("2 | prf_hz = = 3"), "{}", d[0]);
     }
 
     #[test]

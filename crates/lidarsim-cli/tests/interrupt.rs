@@ -1,0 +1,200 @@
+//! Ctrl-C and resume through the binary: SIGINT to a running simulation
+//! stops it at a block boundary with valid files and `"complete": false`;
+//! `lidarsim run --resume DIR` finishes it, and the result equals an
+//! uninterrupted run byte for byte.
+//!
+//! Compared byte for byte: points.las, points.xyz, survey.toml and the
+//! three trajectories. summary.json is compared without its wall-clock
+//! fields (`wall_time_s`, `index_time_s`, `pulses_per_second`) and
+//! report.html without its "source", "wall time" and "pulses per second"
+//! rows: timings belong to the sessions, and the resumed run reads its
+//! survey from the output directory (its "source").
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn bin() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_lidarsim"));
+    c.env("SOURCE_DATE_EPOCH", "1790000000");
+    c
+}
+
+fn temp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("lidarsim-int-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// About 2 s of simulation on one thread: one 8 s line at 30 kHz over a
+/// plane and a sloping roof, with GNSS/IMU errors.
+const SURVEY: &str = r#"seed = 5
+preset = "survey-grade"
+
+[scanner]
+prf_hz = 30000
+scan_frequency_hz = 40
+scan_angle_deg = 20
+subrays = 7
+
+[[flight_line]]
+start_m = [0.0, -200.0, 400.0]
+end_m = [0.0, 200.0, 400.0]
+speed_mps = 50.0
+
+[output]
+formats = ["las", "xyz"]
+
+[materials.grass]
+reflectance = 0.4
+
+[materials.roof]
+reflectance = 0.2
+
+[[polygon]]
+material = "grass"
+class = "ground"
+vertices_m = [[-400, -400, 0], [400, -400, 0], [400, 400, 0], [-400, 400, 0]]
+
+[[polygon]]
+material = "roof"
+class = "building"
+vertices_m = [[-20, -20, 8], [30, -20, 8], [30, 20, 12], [-20, 20, 12]]
+"#;
+
+fn json(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap()
+}
+
+fn without_timings(mut v: serde_json::Value) -> serde_json::Value {
+    let m = v.as_object_mut().unwrap();
+    for k in ["wall_time_s", "index_time_s", "pulses_per_second"] {
+        assert!(m.remove(k).is_some(), "{k} missing");
+    }
+    v
+}
+
+fn report_without_timings(dir: &Path) -> String {
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    html.split("<tr>")
+        .filter(|row| {
+            ![
+                "<th>source</th>",
+                "<th>wall time</th>",
+                "<th>pulses per second</th>",
+            ]
+            .iter()
+            .any(|k| row.starts_with(k))
+        })
+        .collect()
+}
+
+#[test]
+fn sigint_then_resume_equals_an_uninterrupted_run() {
+    let dir = temp("sigint");
+    let survey = dir.join("s.toml");
+    std::fs::write(&survey, SURVEY).unwrap();
+
+    // The reference.
+    let full = dir.join("full");
+    let t = Instant::now();
+    let o = bin()
+        .arg("run")
+        .arg(&survey)
+        .args(["--threads", "1", "-o"])
+        .arg(&full)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let full_time = t.elapsed();
+
+    // The interrupted run: SIGINT once its LAS file is being written.
+    let part = dir.join("part");
+    let child = bin()
+        .arg("run")
+        .arg(&survey)
+        .args(["--threads", "1", "-o"])
+        .arg(&part)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let partial = part.join("points.las.partial");
+    let t = Instant::now();
+    while !partial.exists() {
+        assert!(t.elapsed() < Duration::from_secs(60), "no partial file");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(full_time / 4);
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains("lidarsim run --resume"), "{stderr}");
+    let s = json(&part);
+    assert_eq!(s["complete"], false);
+    let total = json(&full)["pulses"].as_u64().unwrap();
+    let done = s["pulses"].as_u64().unwrap();
+    let next = s["next_pulse"]["pulse"].as_u64().unwrap();
+    assert!(done > 0 && done < total, "{done} of {total}");
+    assert_eq!(next, done);
+    assert_eq!(next % 2048, 0);
+    // Valid LAS for what was written: header count = bytes on disk.
+    let las = std::fs::read(part.join("points.las")).unwrap();
+    let count = u64::from_le_bytes(las[247..255].try_into().unwrap());
+    let offset = u64::from(u32::from_le_bytes(las[96..100].try_into().unwrap()));
+    let record = u64::from(u16::from_le_bytes(las[105..107].try_into().unwrap()));
+    assert_eq!(las.len() as u64, offset + count * record);
+    assert_eq!(count, s["points"].as_u64().unwrap());
+    assert!(!partial.exists());
+    println!(
+        "interrupted after {done} of {total} pulses ({count} points), full run {:.2} s",
+        full_time.as_secs_f64()
+    );
+
+    // Resume.
+    let o = bin()
+        .args(["run", "--threads", "1", "--resume"])
+        .arg(&part)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in [
+        "points.las",
+        "points.xyz",
+        "survey.toml",
+        "trajectory.csv",
+        "trajectory_true.csv",
+        "trajectory_observed.csv",
+    ] {
+        let (x, y) = (
+            std::fs::read(full.join(f)).unwrap(),
+            std::fs::read(part.join(f)).unwrap(),
+        );
+        assert!(x == y, "{f} differs ({} vs {} bytes)", x.len(), y.len());
+    }
+    assert_eq!(without_timings(json(&full)), without_timings(json(&part)));
+    assert_eq!(report_without_timings(&full), report_without_timings(&part));
+    assert!(!part.join("report.state").exists());
+
+    // Resuming a complete run, or a directory without a run, is refused.
+    for d in [&part, &dir] {
+        let o = bin().args(["run", "--resume"]).arg(d).output().unwrap();
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && !stderr.contains("panicked"),
+            "{stderr}"
+        );
+        assert!(
+            stderr.contains("nothing to resume") || stderr.contains("no such file"),
+            "{stderr}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
