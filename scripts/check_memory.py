@@ -37,6 +37,10 @@ vertices_m = [[-400, -100, 0], [400, -100, 0], [400, {far}, 0], [-400, {far}, 0]
 """
 
 LONG = """
+# Bare point format 6 (no extra bytes): the file must be exactly the
+# 375-byte LAS 1.4 header plus 30 bytes per point.
+[output]
+extra_bytes = false
 [scanner]
 prf_hz = 250000
 scan_angle_deg = 20
