@@ -11,6 +11,7 @@
 pub mod forest;
 mod obj;
 mod polygon;
+pub mod terrain;
 pub mod tree;
 
 pub use obj::{MeshError, MeshPlacement, load_obj};
@@ -208,6 +209,8 @@ pub enum Shape {
     Trunk(Trunk),
     /// A tree's crown: a volume the beam penetrates (never a closest hit).
     Crown(Box<Crown>),
+    /// A block of cells of a terrain height grid.
+    Terrain(terrain::TerrainTile),
 }
 
 /// One surface of the scene.
@@ -231,6 +234,7 @@ impl Primitive {
             Shape::Triangle(t) => Aabb::from_points(&t.vertices()),
             Shape::Trunk(t) => t.bounds(),
             Shape::Crown(c) => c.bounds(),
+            Shape::Terrain(t) => t.bounds(),
         }
     }
 
@@ -249,6 +253,7 @@ impl Primitive {
             Shape::Triangle(t) => t.intersect(ray, t_min, t_max),
             Shape::Trunk(t) => t.intersect(ray, t_min, t_max).map(|(d, _)| d),
             Shape::Crown(_) => None,
+            Shape::Terrain(t) => t.intersect(ray, t_min, t_max),
         }
     }
 
@@ -260,6 +265,7 @@ impl Primitive {
             Shape::Triangle(t) => t.normal(),
             Shape::Trunk(t) => t.normal_at(p),
             Shape::Crown(_) => DVec3::Z,
+            Shape::Terrain(t) => t.normal_at(p),
         }
     }
 }

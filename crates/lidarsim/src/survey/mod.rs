@@ -945,6 +945,170 @@ fn check_forest(
     })
 }
 
+/// Validates a `[[terrain]]` entry and adds its tiles to `scene`.
+#[allow(clippy::too_many_arguments)]
+fn check_terrain(
+    c: &mut Checker,
+    tp: &KeyPath,
+    t: &raw::RawTerrain,
+    materials: &HashMap<String, Material>,
+    base: &Path,
+    survey_seed: u64,
+    index: usize,
+    scene: &mut Scene,
+) {
+    let class = match &t.class {
+        None => SurfaceClass::Ground,
+        some => c.class(tp.key("class"), some),
+    };
+    let material = match &t.material {
+        None => {
+            c.err(
+                tp.key("material"),
+                "is required: the name of a [materials.NAME] table",
+            );
+            None
+        }
+        Some(m) => match materials.get(m) {
+            Some(mat) => Some(mat.clone()),
+            None => {
+                let mut names: Vec<&str> = materials.keys().map(String::as_str).collect();
+                names.sort();
+                c.err(
+                    tp.key("material"),
+                    format!("unknown material '{m}' (defined: {})", names.join(", ")),
+                );
+                None
+            }
+        },
+    };
+    let offset = match &t.offset_m {
+        None => Some(DVec3::ZERO),
+        some => c.point(tp.key("offset_m"), some),
+    };
+    let fbm_keys = [
+        ("extent_m", t.extent_m.is_some()),
+        ("resolution_m", t.resolution_m.is_some()),
+        ("relief_m", t.relief_m.is_some()),
+        ("wavelength_m", t.wavelength_m.is_some()),
+        ("octaves", t.octaves.is_some()),
+        ("seed", t.seed.is_some()),
+    ];
+    let grid = match (&t.file, &t.generator) {
+        (Some(_), Some(_)) => {
+            c.err(
+                tp.key("generator"),
+                "give either `file` (a raster) or `generator`, not both",
+            );
+            None
+        }
+        (None, None) => {
+            c.err(
+                tp.key("file"),
+                "is required: a GeoTIFF (.tif) or ESRI ASCII grid (.asc) file, or set \
+                 `generator = \"fbm\"`",
+            );
+            None
+        }
+        (Some(file), None) => {
+            for (key, set) in fbm_keys {
+                if set {
+                    c.err(
+                        tp.key(key),
+                        "belongs to `generator = \"fbm\"`; a raster `file` gives its own grid",
+                    );
+                }
+            }
+            match crate::scene::terrain::read_raster(&base.join(file)) {
+                Ok(g) => Some(g),
+                Err(e) => {
+                    c.err(tp.key("file"), e.to_string());
+                    None
+                }
+            }
+        }
+        (None, Some(generator)) if generator == "fbm" => {
+            let extent = match &t.extent_m {
+                Some(e)
+                    if e.len() == 4
+                        && e.iter().all(|v| v.is_finite())
+                        && e[2] > e[0]
+                        && e[3] > e[1] =>
+                {
+                    Some([e[0], e[1], e[2], e[3]])
+                }
+                Some(_) => {
+                    c.err(
+                        tp.key("extent_m"),
+                        "must be [xmin, ymin, xmax, ymax] in metres with xmax > xmin and \
+                         ymax > ymin",
+                    );
+                    None
+                }
+                None => {
+                    c.err(
+                        tp.key("extent_m"),
+                        "is required: [xmin, ymin, xmax, ymax] in metres",
+                    );
+                    None
+                }
+            };
+            let resolution_m = c.positive(tp.key("resolution_m"), t.resolution_m, 1.0, " m");
+            let relief_m = c.number(tp.key("relief_m"), t.relief_m, 20.0, 0.0, false, 1e4, " m");
+            let octaves = c.count(tp.key("octaves"), t.octaves, 6, 1, 16) as u32;
+            let Some(extent) = extent else { return };
+            let wavelength_m = c.positive(
+                tp.key("wavelength_m"),
+                t.wavelength_m,
+                ((extent[2] - extent[0]).max(extent[3] - extent[1]) / 2.0).max(resolution_m),
+                " m",
+            );
+            let spec = crate::scene::terrain::FbmSpec {
+                extent_m: extent,
+                resolution_m,
+                relief_m,
+                wavelength_m,
+                octaves,
+                seed: t.seed.unwrap_or_else(|| {
+                    crate::rng::mix64(survey_seed.wrapping_add(0x7E_4A1 + index as u64))
+                }),
+            };
+            let (cols, rows) = spec.nodes();
+            if cols < 2 || rows < 2 {
+                c.err(
+                    tp.key("resolution_m"),
+                    format!("{resolution_m} m leaves fewer than 2 × 2 grid nodes in the extent"),
+                );
+                return;
+            }
+            match crate::scene::terrain::generate_fbm(&spec) {
+                Ok(g) => Some(g),
+                Err(e) => {
+                    c.err(tp.key("resolution_m"), e.to_string());
+                    None
+                }
+            }
+        }
+        (None, Some(other)) => {
+            c.err(
+                tp.key("generator"),
+                format!("unknown generator '{other}'; expected \"fbm\""),
+            );
+            None
+        }
+    };
+    let (Some(mut grid), Some(material), Some(offset)) = (grid, material, offset) else {
+        return;
+    };
+    grid.shift(offset);
+    let m = scene.add_material(material);
+    let name = match &t.file {
+        Some(f) => format!("terrain[{index}]:{f}"),
+        None => format!("terrain[{index}]:fbm"),
+    };
+    crate::scene::terrain::add_terrain(scene, grid, m, class, name);
+}
+
 impl Survey {
     /// Reads and validates a survey file. Mesh paths are relative to it.
     pub fn load(path: &Path) -> Result<Self, SurveyError> {
@@ -1505,6 +1669,10 @@ impl Survey {
                 c.err(mp.key("file"), e.to_string());
             }
         }
+        for (i, t) in raw.terrains.iter().enumerate() {
+            let tp = root.key("terrain").index(i);
+            check_terrain(&mut c, &tp, t, &materials, &base, seed, i, &mut scene);
+        }
         // [vegetation], [[tree]], [[forest]]
         let v = &raw.vegetation;
         let vp = root.key("vegetation");
@@ -1678,7 +1846,8 @@ impl Survey {
         if scene.primitives.is_empty() && c.problems.is_empty() {
             c.err(
                 root,
-                "the scene is empty: add [[polygon]], [[mesh]], [[tree]] or [[forest]] entries \
+                "the scene is empty: add [[polygon]], [[mesh]], [[terrain]], [[point_cloud]], \
+                 [[tree]] or [[forest]] entries \
                  for the laser to hit",
             );
         }
