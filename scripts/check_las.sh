@@ -8,8 +8,9 @@ venv=target/pyenv
 if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
-if ! "$venv/bin/python" -c "import laspy, lazrs, numpy" 2>/dev/null; then
-  "$venv/bin/pip" install --quiet --disable-pip-version-check "laspy>=2.5" "lazrs>=0.6" numpy
+if ! "$venv/bin/python" -c "import laspy, lazrs, numpy, rasterio" 2>/dev/null; then
+  # rasterio's wheels bundle GDAL: the independent writer of terrain rasters.
+  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check "laspy>=2.5" "lazrs>=0.6" numpy "rasterio>=1.3"
 fi
 
 out=target/demo-check
@@ -21,3 +22,7 @@ cargo run --release --quiet -- demo -o "$out"
 rm -rf target/extra-bytes-check
 cargo run --release --quiet -- run scripts/fixtures/gnss-bias.toml -o target/extra-bytes-check > /dev/null
 "$venv/bin/python" scripts/check_extra_bytes.py target/extra-bytes-check
+
+# Terrain rasters written by GDAL (rasterio), flown, points read by laspy.
+rm -rf target/terrain-check
+"$venv/bin/python" scripts/check_terrain.py target/release/lidarsim target/terrain-check

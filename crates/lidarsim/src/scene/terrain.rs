@@ -27,7 +27,8 @@
 //! in the file's vertical unit (taken as metres), as GDAL reads them.
 //!
 //! ESRI ASCII grid: header keys `ncols`, `nrows`, `xllcorner`|`xllcenter`,
-//! `yllcorner`|`yllcenter`, `cellsize`, optional `NODATA_value`; then
+//! `yllcorner`|`yllcenter`, `cellsize` (or GDAL's `dx` and `dy` for
+//! rectangular cells), optional `NODATA_value`; then
 //! `nrows` rows of `ncols` values, the first row being the northernmost.
 
 use std::io::BufReader;
@@ -501,7 +502,7 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
         if header.iter().any(|(k, _, _)| *k == key) {
             return Err(err(n + 1, format!("header key '{key}' is given twice")));
         }
-        const KNOWN: [&str; 9] = [
+        const KNOWN: [&str; 11] = [
             "ncols",
             "nrows",
             "xllcorner",
@@ -509,6 +510,8 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
             "yllcorner",
             "yllcenter",
             "cellsize",
+            "dx",
+            "dy",
             "nodata_value",
             "byteorder",
         ];
@@ -517,7 +520,7 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
                 n + 1,
                 format!(
                     "unknown header key '{key}'; expected ncols, nrows, xllcorner or xllcenter, \
-                     yllcorner or yllcenter, cellsize, NODATA_value"
+                     yllcorner or yllcenter, cellsize (or dx and dy), NODATA_value"
                 ),
             ));
         }
@@ -545,19 +548,34 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
     };
     let ncols = count("ncols")?;
     let nrows = count("nrows")?;
-    let cellsize = match get("cellsize") {
-        None => return Err(err(0, "the header has no 'cellsize'".to_string())),
-        Some((v, line)) if v <= 0.0 => {
+    // `cellsize`, or GDAL's `dx` and `dy` for rectangular cells.
+    let positive = |k: &str| -> Result<Option<f64>, TerrainError> {
+        match get(k) {
+            Some((v, line)) if v <= 0.0 => {
+                Err(err(line, format!("'{k}' must be greater than 0, got {v}")))
+            }
+            other => Ok(other.map(|h| h.0)),
+        }
+    };
+    let (dx, dy) = match (positive("cellsize")?, positive("dx")?, positive("dy")?) {
+        (Some(s), None, None) => (s, s),
+        (None, Some(dx), Some(dy)) => (dx, dy),
+        (Some(_), _, _) => {
             return Err(err(
-                line,
-                format!("'cellsize' must be greater than 0, got {v}"),
+                0,
+                "give either 'cellsize' or 'dx' and 'dy', not both".to_string(),
             ));
         }
-        Some((v, _)) => v,
+        _ => {
+            return Err(err(
+                0,
+                "the header has no 'cellsize' (nor 'dx' and 'dy')".to_string(),
+            ));
+        }
     };
-    let centre = |corner: &str, center: &str| -> Result<f64, TerrainError> {
+    let centre = |corner: &str, center: &str, step: f64| -> Result<f64, TerrainError> {
         match (get(corner), get(center)) {
-            (Some((v, _)), None) => Ok(v + cellsize / 2.0),
+            (Some((v, _)), None) => Ok(v + step / 2.0),
             (None, Some((v, _))) => Ok(v),
             (Some(_), Some((_, line))) => Err(err(
                 line,
@@ -569,8 +587,8 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
             )),
         }
     };
-    let x0 = centre("xllcorner", "xllcenter")?;
-    let y0 = centre("yllcorner", "yllcenter")?;
+    let x0 = centre("xllcorner", "xllcenter", dx)?;
+    let y0 = centre("yllcorner", "yllcenter", dy)?;
     let nodata = get("nodata_value").map(|h| h.0);
     let total = ncols
         .checked_mul(nrows)
@@ -616,7 +634,7 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
         cols: ncols,
         rows: nrows,
         origin_m: [x0, y0],
-        spacing_m: [cellsize, cellsize],
+        spacing_m: [dx, dy],
         z_offset_m: 0.0,
         heights,
     };
@@ -1005,6 +1023,13 @@ mod tests {
         );
         let g = read_ascii_grid(&p).unwrap();
         assert_eq!(g.origin_m, [0.5, -3.0]);
+        // GDAL's rectangular cells: dx, dy instead of cellsize.
+        let q = temp(
+            "d.asc",
+            "ncols 2\nnrows 2\nxllcorner 10\nyllcorner 20\ndx 4\ndy 3\n1 2\n3 4\n",
+        );
+        let r = read_ascii_grid(&q).unwrap();
+        assert_eq!((r.origin_m, r.spacing_m), ([12.0, 21.5], [4.0, 3.0]));
         assert_eq!(g.heights, vec![9.0, 10.0, 7.0, 8.0]);
         // Interpolation on the lower triangle (0,0),(1,0),(1,1).
         let z = g.elevation_at(0.5 + 1.5, -3.0 + 0.5).unwrap();
