@@ -466,24 +466,32 @@ pub fn read_raster(path: &Path) -> Result<HeightGrid, TerrainError> {
 
 /// Reads an ESRI ASCII grid.
 pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
-    let text = std::fs::read_to_string(path).map_err(|source| TerrainError::Read {
+    use std::io::BufRead;
+    let read_err = |source| TerrainError::Read {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    let file = std::fs::File::open(path).map_err(read_err)?;
     let err = |line: usize, reason: String| TerrainError::Format {
         path: path.to_path_buf(),
         line,
         reason,
     };
-    let mut lines = text.lines().enumerate().peekable();
+    // Streamed line by line: a 4000 × 4000 grid is ~350 MB of text.
+    let mut lines = BufReader::new(file)
+        .lines()
+        .enumerate()
+        .map(|(n, l)| l.map(|l| (n, l)));
     let mut header: Vec<(String, f64, usize)> = Vec::new();
-    while let Some(&(n, line)) = lines.peek() {
+    let mut first_data: Option<(usize, String)> = None;
+    for item in lines.by_ref() {
+        let (n, line) = item.map_err(read_err)?;
         let mut words = line.split_whitespace();
         let Some(key) = words.next() else {
-            lines.next();
             continue;
         };
         if !key.starts_with(|c: char| c.is_ascii_alphabetic()) {
+            first_data = Some((n, line));
             break;
         }
         let key = key.to_ascii_lowercase();
@@ -502,7 +510,7 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
         if header.iter().any(|(k, _, _)| *k == key) {
             return Err(err(n + 1, format!("header key '{key}' is given twice")));
         }
-        const KNOWN: [&str; 11] = [
+        const KNOWN: [&str; 10] = [
             "ncols",
             "nrows",
             "xllcorner",
@@ -513,7 +521,6 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
             "dx",
             "dy",
             "nodata_value",
-            "byteorder",
         ];
         if !KNOWN.contains(&key.as_str()) {
             return Err(err(
@@ -525,7 +532,6 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
             ));
         }
         header.push((key, value, n + 1));
-        lines.next();
     }
     let get = |k: &str| {
         header
@@ -600,7 +606,8 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
     let mut heights = vec![f32::NAN; total];
     let mut k = 0usize;
     let mut last_line = 0;
-    for (n, line) in lines {
+    for item in first_data.map(Ok).into_iter().chain(lines) {
+        let (n, line) = item.map_err(read_err)?;
         for word in line.split_whitespace() {
             if k >= total {
                 return Err(err(
