@@ -1656,6 +1656,15 @@ impl Survey {
                 c.err(mp.key("file"), "is required: path of an OBJ file");
                 continue;
             };
+            let mut class_map = Vec::new();
+            for (pattern, name) in mesh.classes.iter().flatten() {
+                let key = mp.key("classes").key(pattern);
+                if pattern.is_empty() {
+                    c.err(key, "an empty pattern matches nothing");
+                    continue;
+                }
+                class_map.push((pattern.clone(), c.class(key, &Some(name.clone()))));
+            }
             let Some(offset) = offset else { continue };
             let placement = MeshPlacement {
                 scale,
@@ -1663,10 +1672,17 @@ impl Survey {
                 offset_m: offset,
                 default_class: class,
                 default_material,
+                class_map,
             };
             let full = base.join(file);
             if let Err(e) = load_obj(&full, &placement, &materials, &mut scene) {
-                c.err(mp.key("file"), e.to_string());
+                let key = match &e {
+                    crate::scene::MeshError::UnmatchedClassPattern { pattern, .. } => {
+                        mp.key("classes").key(pattern)
+                    }
+                    _ => mp.key("file"),
+                };
+                c.err(key, e.to_string());
             }
         }
         for (i, t) in raw.terrains.iter().enumerate() {
@@ -2061,5 +2077,42 @@ vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
         let d = diagnostics(&warped);
         assert!(d[0].message.contains("not planar"), "{}", d[0].message);
         assert_eq!(d[0].line, 13);
+    }
+
+    #[test]
+    fn mesh_class_patterns_map_groups_and_name_their_key() {
+        let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/x.toml");
+        let text = |classes: &str| {
+            format!(
+                "[[flight_line]]\nstart_m = [0, -50, 300]\nend_m = [0, 50, 300]\nspeed_mps = 50\n\
+                 [[mesh]]\nfile = \"house.obj\"\nclass = \"roof\"\nclasses = {{ {classes} }}\n"
+            )
+        };
+        let s = Survey::from_toml(&text("\"wall*\" = \"bridge\""), Some(&base))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let count = |c: SurfaceClass| s.scene.primitives.iter().filter(|p| p.class == c).count();
+        // house.obj: the gable walls (south, north) are pentagons of three
+        // triangles, east and west quads of two: 10 triangles become
+        // bridge, no wall is left.
+        assert_eq!(count(SurfaceClass::Bridge), 10);
+        assert_eq!(count(SurfaceClass::Wall), 0);
+        assert!(count(SurfaceClass::Roof) > 0);
+
+        let e = Survey::from_toml(&text("\"wal*\" = \"wall\", roofs = \"roof\""), Some(&base))
+            .unwrap_err();
+        assert_eq!(e.diagnostics.len(), 1, "{e}");
+        assert_eq!(e.diagnostics[0].key, "mesh[0].classes.roofs");
+        assert!(
+            e.diagnostics[0]
+                .message
+                .contains("no group or object name matches 'roofs'")
+        );
+        assert_eq!(e.diagnostics[0].line, 8);
+        let e = Survey::from_toml(&text("\"wall*\" = \"lava\""), Some(&base)).unwrap_err();
+        assert!(
+            e.diagnostics[0].message.contains("unknown class 'lava'"),
+            "{e}"
+        );
+        assert_eq!(e.diagnostics[0].line, 8);
     }
 }

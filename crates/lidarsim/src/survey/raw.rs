@@ -230,6 +230,10 @@ pub struct RawMesh {
     pub class: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
+    /// Group/object name pattern (`*` matches any run of characters) →
+    /// class.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub classes: Option<BTreeMap<String, String>>,
 }
 
 /// `[[terrain]]`: a raster DEM (`file`) or a generated one (`generator`).
