@@ -8,6 +8,7 @@
 //! closest hit among many primitives is the job of [`crate::accel`], and the
 //! way through crowns that of [`crate::canopy`].
 
+pub mod cloud;
 pub mod forest;
 mod obj;
 mod polygon;
@@ -211,6 +212,8 @@ pub enum Shape {
     Crown(Box<Crown>),
     /// A block of cells of a terrain height grid.
     Terrain(terrain::TerrainTile),
+    /// An opaque box: one occupied voxel of a point cloud.
+    Voxel(cloud::Voxel),
 }
 
 /// One surface of the scene.
@@ -235,6 +238,7 @@ impl Primitive {
             Shape::Trunk(t) => t.bounds(),
             Shape::Crown(c) => c.bounds(),
             Shape::Terrain(t) => t.bounds(),
+            Shape::Voxel(v) => v.bounds,
         }
     }
 
@@ -254,6 +258,7 @@ impl Primitive {
             Shape::Trunk(t) => t.intersect(ray, t_min, t_max).map(|(d, _)| d),
             Shape::Crown(_) => None,
             Shape::Terrain(t) => t.intersect(ray, t_min, t_max),
+            Shape::Voxel(v) => v.intersect(ray, t_min, t_max),
         }
     }
 
@@ -266,6 +271,7 @@ impl Primitive {
             Shape::Trunk(t) => t.normal_at(p),
             Shape::Crown(_) => DVec3::Z,
             Shape::Terrain(t) => t.normal_at(p),
+            Shape::Voxel(v) => v.normal_at(p),
         }
     }
 }

@@ -1689,6 +1689,55 @@ impl Survey {
             let tp = root.key("terrain").index(i);
             check_terrain(&mut c, &tp, t, &materials, &base, seed, i, &mut scene);
         }
+        for (i, pc) in raw.point_clouds.iter().enumerate() {
+            let pp = root.key("point_cloud").index(i);
+            let class = pc
+                .class
+                .as_ref()
+                .map(|_| c.class(pp.key("class"), &pc.class));
+            let voxel_m = c.number(pp.key("voxel_m"), pc.voxel_m, 0.5, 0.0, true, 1000.0, " m");
+            let offset = match &pc.offset_m {
+                None => Some(DVec3::ZERO),
+                some => c.point(pp.key("offset_m"), some),
+            };
+            let material = match &pc.material {
+                None => {
+                    c.err(
+                        pp.key("material"),
+                        "is required: the name of a [materials.NAME] table",
+                    );
+                    None
+                }
+                Some(m) => match materials.get(m) {
+                    Some(mat) => Some(mat.clone()),
+                    None => {
+                        c.err(
+                            pp.key("material"),
+                            format!("unknown material '{m}' ({})", known(&materials)),
+                        );
+                        None
+                    }
+                },
+            };
+            let Some(file) = &pc.file else {
+                c.err(pp.key("file"), "is required: path of a LAS or LAZ file");
+                continue;
+            };
+            let (Some(material), Some(offset)) = (material, offset) else {
+                continue;
+            };
+            let placement = crate::scene::cloud::CloudPlacement {
+                voxel_m,
+                offset_m: offset,
+                material: scene.add_material(material),
+                class,
+            };
+            if let Err(e) =
+                crate::scene::cloud::load_point_cloud(&base.join(file), &placement, &mut scene)
+            {
+                c.err(pp.key("file"), e.to_string());
+            }
+        }
         // [vegetation], [[tree]], [[forest]]
         let v = &raw.vegetation;
         let vp = root.key("vegetation");
