@@ -10,12 +10,14 @@
 
 pub mod cloud;
 pub mod forest;
+mod gltf_mesh;
 mod obj;
 mod polygon;
 pub mod terrain;
 pub mod tree;
 
-pub use obj::{MeshError, MeshPlacement, load_obj};
+pub use gltf_mesh::load_gltf;
+pub use obj::{MeshError, MeshPlacement, glob_match, load_obj};
 pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
 pub use tree::{Crown, Species, TreeSpec, Trunk};
 

@@ -86,6 +86,14 @@ pub enum MeshError {
         /// OBJ file.
         path: PathBuf,
     },
+    /// A glTF file could not be read or breaks the glTF 2.0 specification.
+    #[error("'{path}': {reason}")]
+    Gltf {
+        /// The glTF file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// A `classes` pattern matches no group or object name of the file.
     #[error("'{path}': no group or object name matches '{pattern}' (names in the file: {names})")]
     UnmatchedClassPattern {
@@ -149,7 +157,7 @@ pub fn glob_match(pattern: &str, name: &str) -> bool {
 /// The class the `class_map` gives a group/object name: an exact name
 /// first, then the matching pattern with the most literal characters (the
 /// first in `map` order among equals).
-fn mapped_class(map: &[(String, SurfaceClass)], name: &str) -> Option<SurfaceClass> {
+pub(crate) fn mapped_class(map: &[(String, SurfaceClass)], name: &str) -> Option<SurfaceClass> {
     map.iter()
         .enumerate()
         .filter(|(_, (p, _))| glob_match(p, name))
@@ -404,7 +412,7 @@ fn mtl_to_material(m: &tobj::Material) -> Result<Material, MeshError> {
 }
 
 /// The first word of an OBJ object/group name that names a class.
-fn class_from_name(name: &str) -> Option<SurfaceClass> {
+pub(crate) fn class_from_name(name: &str) -> Option<SurfaceClass> {
     name.split(|c: char| !c.is_ascii_alphanumeric())
         .find_map(SurfaceClass::from_name)
 }

@@ -112,7 +112,7 @@ impl HeightGrid {
             return None;
         }
         let h = self.heights[row * self.cols + col];
-        h.is_finite().then(|| h as f64 + self.z_offset_m)
+        h.is_finite().then_some(h as f64 + self.z_offset_m)
     }
 
     /// World position of node `(col, row)` (NaN height for nodata).

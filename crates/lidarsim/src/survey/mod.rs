@@ -1653,7 +1653,10 @@ impl Survey {
                 },
             };
             let Some(file) = &mesh.file else {
-                c.err(mp.key("file"), "is required: path of an OBJ file");
+                c.err(
+                    mp.key("file"),
+                    "is required: path of an OBJ, glTF (.gltf) or binary glTF (.glb) file",
+                );
                 continue;
             };
             let mut class_map = Vec::new();
@@ -1675,7 +1678,16 @@ impl Survey {
                 class_map,
             };
             let full = base.join(file);
-            if let Err(e) = load_obj(&full, &placement, &materials, &mut scene) {
+            let is_gltf = full
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
+            let loaded = if is_gltf {
+                crate::scene::load_gltf(&full, &placement, &materials, &mut scene)
+            } else {
+                load_obj(&full, &placement, &materials, &mut scene)
+            };
+            if let Err(e) = loaded {
                 let key = match &e {
                     crate::scene::MeshError::UnmatchedClassPattern { pattern, .. } => {
                         mp.key("classes").key(pattern)
