@@ -2176,4 +2176,34 @@ vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
         );
         assert_eq!(e.diagnostics[0].line, 8);
     }
+
+    #[test]
+    fn terrain_example_loads_with_trees_on_the_terrain() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/terrain.toml");
+        let s = Survey::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let b = s.scene.bounds();
+        // The fBm terrain: extent [-300, -200, 300, 200] on a 2 m grid,
+        // relief 35 m from z = 0; tree crowns reach higher.
+        assert_eq!(
+            (b.min.x, b.min.y, b.max.x, b.max.y),
+            (-300.0, -200.0, 300.0, 200.0)
+        );
+        assert_eq!(b.min.z, 0.0);
+        let terrain = s
+            .scene
+            .primitives
+            .iter()
+            .filter(|p| matches!(p.shape, Shape::Terrain(_)))
+            .count();
+        // 300 × 200 cells in 16-cell tiles: ceil(300/16) × ceil(200/16).
+        assert_eq!(terrain, 19 * 13);
+        // Every trunk stands on the terrain: its base is within the relief.
+        for p in &s.scene.primitives {
+            if let Shape::Trunk(_) = &p.shape {
+                let z = p.bounds().min.z;
+                assert!((0.0..=35.0001).contains(&z), "trunk base at {z}");
+            }
+        }
+        assert!(s.forest_trees[0] > 1000, "{:?}", s.forest_trees);
+    }
 }
