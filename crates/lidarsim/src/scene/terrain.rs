@@ -896,18 +896,30 @@ pub fn generate_fbm(spec: &FbmSpec) -> Result<HeightGrid, TerrainError> {
         .enumerate()
         .for_each(|(j, row)| {
             let y = j as f64 * spec.resolution_m;
-            for (i, h) in row.iter_mut().enumerate() {
-                let x = i as f64 * spec.resolution_m;
-                let mut sum = 0.0;
-                let mut amp = 1.0;
-                let mut freq = 1.0 / spec.wavelength_m;
-                for o in 0..spec.octaves {
-                    let key = crate::rng::mix64(spec.seed ^ (o as u64).wrapping_mul(0x9E37_79B9));
-                    sum += amp * gradient_noise(key, x * freq, y * freq);
-                    amp *= 0.5;
-                    freq *= 2.0;
+            let mut sum = vec![0.0f64; row.len()];
+            let mut amp = 1.0;
+            let mut freq = 1.0 / spec.wavelength_m;
+            for o in 0..spec.octaves {
+                let noise = GradientNoise {
+                    key: crate::rng::mix64(spec.seed ^ (o as u64).wrapping_mul(0x9E37_79B9)),
+                };
+                // Along a row the lattice cell changes rarely: its four
+                // gradients are hashed once per cell.
+                let (yy, mut cell, mut grads) = (y * freq, i64::MIN, [(0.0, 0.0); 4]);
+                for (i, s) in sum.iter_mut().enumerate() {
+                    let xx = i as f64 * spec.resolution_m * freq;
+                    let ix = xx.floor() as i64;
+                    if ix != cell {
+                        cell = ix;
+                        grads = noise.corners(ix, yy.floor() as i64);
+                    }
+                    *s += amp * noise.eval(&grads, xx, yy);
                 }
-                *h = sum as f32;
+                amp *= 0.5;
+                freq *= 2.0;
+            }
+            for (h, s) in row.iter_mut().zip(&sum) {
+                *h = *s as f32;
             }
         });
     let (lo, hi) = heights
@@ -943,7 +955,11 @@ pub fn generate_fbm(spec: &FbmSpec) -> Result<HeightGrid, TerrainError> {
 
 /// 2-D gradient noise (Perlin 2002, "Improving noise": quintic fade,
 /// gradients from a hashed lattice), roughly in [-1, 1].
-fn gradient_noise(key: u64, x: f64, y: f64) -> f64 {
+struct GradientNoise {
+    key: u64,
+}
+
+impl GradientNoise {
     const DIRS: [(f64, f64); 8] = [
         (1.0, 0.0),
         (-1.0, 0.0),
@@ -966,24 +982,40 @@ fn gradient_noise(key: u64, x: f64, y: f64) -> f64 {
             -std::f64::consts::FRAC_1_SQRT_2,
         ),
     ];
-    let (xf, yf) = (x.floor(), y.floor());
-    let (ix, iy) = (xf as i64, yf as i64);
-    let (fx, fy) = (x - xf, y - yf);
-    let grad = |cx: i64, cy: i64, dx: f64, dy: f64| {
-        let h =
-            crate::rng::mix64(key ^ crate::rng::mix64((cx as u64) ^ (cy as u64).rotate_left(32)));
-        let (gx, gy) = DIRS[(h >> 61) as usize];
-        gx * dx + gy * dy
-    };
-    let fade = |t: f64| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
-    let (u, v) = (fade(fx), fade(fy));
-    let n00 = grad(ix, iy, fx, fy);
-    let n10 = grad(ix + 1, iy, fx - 1.0, fy);
-    let n01 = grad(ix, iy + 1, fx, fy - 1.0);
-    let n11 = grad(ix + 1, iy + 1, fx - 1.0, fy - 1.0);
-    let a = n00 + u * (n10 - n00);
-    let b = n01 + u * (n11 - n01);
-    (a + v * (b - a)) * std::f64::consts::SQRT_2
+
+    /// Gradient at lattice point `(cx, cy)`.
+    fn gradient(&self, cx: i64, cy: i64) -> (f64, f64) {
+        let h = crate::rng::mix64(
+            self.key ^ crate::rng::mix64((cx as u64) ^ (cy as u64).rotate_left(32)),
+        );
+        Self::DIRS[(h >> 61) as usize]
+    }
+
+    /// Gradients at the corners (0,0), (1,0), (0,1), (1,1) of lattice cell
+    /// `(ix, iy)`.
+    fn corners(&self, ix: i64, iy: i64) -> [(f64, f64); 4] {
+        [
+            self.gradient(ix, iy),
+            self.gradient(ix + 1, iy),
+            self.gradient(ix, iy + 1),
+            self.gradient(ix + 1, iy + 1),
+        ]
+    }
+
+    /// Noise at `(x, y)` given the gradients of its lattice cell.
+    fn eval(&self, g: &[(f64, f64); 4], x: f64, y: f64) -> f64 {
+        let (fx, fy) = (x - x.floor(), y - y.floor());
+        let dot = |g: (f64, f64), dx: f64, dy: f64| g.0 * dx + g.1 * dy;
+        let fade = |t: f64| t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
+        let (u, v) = (fade(fx), fade(fy));
+        let n00 = dot(g[0], fx, fy);
+        let n10 = dot(g[1], fx - 1.0, fy);
+        let n01 = dot(g[2], fx, fy - 1.0);
+        let n11 = dot(g[3], fx - 1.0, fy - 1.0);
+        let a = n00 + u * (n10 - n00);
+        let b = n01 + u * (n11 - n01);
+        (a + v * (b - a)) * std::f64::consts::SQRT_2
+    }
 }
 
 #[cfg(test)]
