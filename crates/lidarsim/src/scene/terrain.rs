@@ -386,7 +386,9 @@ fn triangle_hit(ray: &Ray, v0: DVec3, v1: DVec3, v2: DVec3, t_min: f64, t_max: f
 }
 
 /// Adds `grid` to `scene` as tiles of one new object; returns the number of
-/// triangles (valid cells' halves) it holds.
+/// triangles (valid cells' halves) it holds. A grid of fewer than 2 × 2
+/// nodes, or whose `heights` do not hold `cols × rows` values, adds
+/// nothing (the readers never return one).
 pub fn add_terrain(
     scene: &mut Scene,
     grid: HeightGrid,
@@ -394,6 +396,9 @@ pub fn add_terrain(
     class: SurfaceClass,
     name: impl Into<String>,
 ) -> usize {
+    if grid.cols < 2 || grid.rows < 2 || grid.heights.len() != grid.cols * grid.rows {
+        return 0;
+    }
     let object: ObjectId = scene.add_object(name);
     let triangles = grid.triangle_count();
     let grid = Arc::new(grid);
@@ -778,6 +783,12 @@ pub fn read_geotiff(path: &Path) -> Result<HeightGrid, TerrainError> {
     // Pixel centre of column i / row j.
     let x_of = |i: usize| ax + bx * (i as f64 + c);
     let y_of = |j: usize| ay + by * (j as f64 + c);
+    if width < 2 || height < 2 {
+        return Err(TerrainError::Size {
+            path: path.to_path_buf(),
+            reason: format!("a terrain needs at least 2 × 2 cells, got {width} × {height}"),
+        });
+    }
     if width.saturating_mul(height) > MAX_NODES {
         return Err(TerrainError::Size {
             path: path.to_path_buf(),
