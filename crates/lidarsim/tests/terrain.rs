@@ -233,3 +233,50 @@ fn terrain_key_errors_name_the_key() {
         assert!(d.line > 0, "{e}");
     }
 }
+
+/// A north-up GeoTIFF georeferenced by `ModelTransformationTag` (GeoTIFF
+/// 1.1 §7.3.4: X = a·I + b·J + d, Y = e·I + f·J + h, row-major 4 × 4), with
+/// PixelIsPoint, written with the `tiff` crate's encoder; and the same
+/// with a rotation, which must be refused.
+#[test]
+fn geotiff_model_transformation_and_rotation() {
+    use tiff::encoder::{TiffEncoder, colortype::Gray32Float};
+    use tiff::tags::Tag;
+    let dir = std::env::temp_dir().join(format!("lidarsim-terrain-mt-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |name: &str, b: f64| {
+        let path = dir.join(name);
+        let mut enc = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
+        let mut img = enc.new_image::<Gray32Float>(4, 3).unwrap();
+        // 2.5 m east per column, 1.5 m south per row, first pixel centre at
+        // (1000, 2000).
+        let m = [
+            2.5, b, 0.0, 1000.0, //
+            0.0, -1.5, 0.0, 2000.0, //
+            0.0, 0.0, 0.0, 0.0, //
+            0.0, 0.0, 0.0, 1.0,
+        ];
+        img.encoder()
+            .write_tag(Tag::ModelTransformationTag, &m[..])
+            .unwrap();
+        // GeoKeyDirectory: version 1.1.0, 1 key; GTRasterTypeGeoKey (1025)
+        // = RasterPixelIsPoint (2).
+        let keys: [u16; 8] = [1, 1, 0, 1, 1025, 0, 1, 2];
+        img.encoder()
+            .write_tag(Tag::GeoKeyDirectoryTag, &keys[..])
+            .unwrap();
+        let data: Vec<f32> = (0..12).map(|k| k as f32 * 0.5).collect();
+        img.write_data(&data).unwrap();
+        path
+    };
+    let g = read_raster(&write("mt.tif", 0.0)).unwrap();
+    assert_eq!((g.cols, g.rows), (4, 3));
+    assert_eq!(g.spacing_m, [2.5, 1.5]);
+    // South-west node: file row 2, column 0 → (1000, 2000 − 2·1.5).
+    assert_eq!(g.origin_m, [1000.0, 1997.0]);
+    // File pixel (col, row) holds 0.5·(4·row + col); grid row 0 is file row 2.
+    assert_eq!(g.height(0, 0), Some(4.0));
+    assert_eq!(g.height(3, 2), Some(1.5));
+    let e = read_raster(&write("rot.tif", 0.3)).unwrap_err().to_string();
+    assert!(e.contains("rotates or shears"), "{e}");
+}
