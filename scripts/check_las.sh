@@ -10,9 +10,10 @@ venv=target/pyenv
 if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
-if ! "$venv/bin/python" -c "import laspy, lazrs, numpy, pyproj" 2>/dev/null; then
+if ! "$venv/bin/python" -c "import laspy, lazrs, numpy, pyproj, rasterio" 2>/dev/null; then
+  # rasterio's wheels bundle GDAL: the independent writer of terrain rasters.
   "$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
-    "laspy>=2.5" "lazrs>=0.6" numpy "pyproj>=3.6"
+    "laspy>=2.5" "lazrs>=0.6" numpy "pyproj>=3.6" "rasterio>=1.3"
 fi
 
 out=target/demo-check
@@ -29,3 +30,7 @@ cargo run --release --quiet -- run scripts/fixtures/gnss-bias.toml -o target/ext
 rm -rf target/outputs-check
 cargo run --release --quiet -- run scripts/fixtures/two-planes.toml -o target/outputs-check > /dev/null
 "$venv/bin/python" scripts/check_outputs.py target/outputs-check
+
+# Terrain rasters written by GDAL (rasterio), flown, points read by laspy.
+rm -rf target/terrain-check
+"$venv/bin/python" scripts/check_terrain.py target/release/lidarsim target/terrain-check

@@ -512,3 +512,40 @@ fn suspicious_settings_are_warned_about_with_their_numbers() {
     assert_eq!(summary["points"], 0);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Regression: a run's survey.toml kept terrain raster paths relative to
+/// the original survey, so `waveform` (which reloads it from the output
+/// directory) could not find the raster.
+#[test]
+fn waveform_replays_a_run_over_a_relative_terrain_raster() {
+    let dir = temp("waveform-terrain");
+    std::fs::write(
+        dir.join("dem.asc"),
+        "ncols 3\nnrows 3\nxllcorner -300\nyllcorner -300\ncellsize 200\n\
+         12 12 12\n12 12 12\n12 12 12\n",
+    )
+    .unwrap();
+    let text = GOOD.replace(
+        "[[polygon]]\nmaterial = \"grass\"\nclass = \"ground\"\n\
+         vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]\n",
+        "[[terrain]]\nfile = \"dem.asc\"\nmaterial = \"grass\"\n",
+    );
+    assert!(text.contains("[[terrain]]"));
+    let (o, out) = run_survey(&dir, &text);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = bin()
+        .arg("waveform")
+        .arg(&out)
+        .args(["--pulse", "100", "-o"])
+        .arg(dir.join("w.png"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The flat raster at 12 m, 288 m below the 300 m line.
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("1 echo(es)") && text.contains("range 29"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

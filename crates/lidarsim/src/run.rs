@@ -589,7 +589,8 @@ fn covered_area(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> crate::
 }
 
 /// The raw survey with its seed fixed and relative file paths (meshes,
-/// trajectory file) resolved against the survey's directory.
+/// terrain rasters, point clouds, trajectory file) resolved against the
+/// survey's directory.
 pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
     let mut raw = survey.raw.clone();
     raw.seed = Some(survey.seed);
@@ -605,10 +606,14 @@ pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
             *f = abs.display().to_string();
         }
     };
-    for m in &mut raw.meshes {
-        if let Some(f) = m.file.as_mut() {
-            resolve(f);
-        }
+    let files = raw
+        .meshes
+        .iter_mut()
+        .map(|m| &mut m.file)
+        .chain(raw.terrains.iter_mut().map(|t| &mut t.file))
+        .chain(raw.point_clouds.iter_mut().map(|c| &mut c.file));
+    for f in files.flatten() {
+        resolve(f);
     }
     if let Some(f) = raw.platform.trajectory_file.as_mut() {
         resolve(f);

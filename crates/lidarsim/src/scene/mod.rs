@@ -8,12 +8,16 @@
 //! closest hit among many primitives is the job of [`crate::accel`], and the
 //! way through crowns that of [`crate::canopy`].
 
+pub mod cloud;
 pub mod forest;
+mod gltf_mesh;
 mod obj;
 mod polygon;
+pub mod terrain;
 pub mod tree;
 
-pub use obj::{MeshError, MeshPlacement, load_obj};
+pub use gltf_mesh::load_gltf;
+pub use obj::{MeshError, MeshPlacement, glob_match, load_obj};
 pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
 pub use tree::{Crown, Species, TreeSpec, Trunk};
 
@@ -239,6 +243,10 @@ pub enum Shape {
     Trunk(Trunk),
     /// A tree's crown: a volume the beam penetrates (never a closest hit).
     Crown(Box<Crown>),
+    /// A block of cells of a terrain height grid.
+    Terrain(terrain::TerrainTile),
+    /// An opaque box: one occupied voxel of a point cloud.
+    Voxel(cloud::Voxel),
 }
 
 /// One surface of the scene.
@@ -262,6 +270,8 @@ impl Primitive {
             Shape::Triangle(t) => Aabb::from_points(&t.vertices()),
             Shape::Trunk(t) => t.bounds(),
             Shape::Crown(c) => c.bounds(),
+            Shape::Terrain(t) => t.bounds(),
+            Shape::Voxel(v) => v.bounds,
         }
     }
 
@@ -280,6 +290,8 @@ impl Primitive {
             Shape::Triangle(t) => t.intersect(ray, t_min, t_max),
             Shape::Trunk(t) => t.intersect(ray, t_min, t_max).map(|(d, _)| d),
             Shape::Crown(_) => None,
+            Shape::Terrain(t) => t.intersect(ray, t_min, t_max),
+            Shape::Voxel(v) => v.intersect(ray, t_min, t_max),
         }
     }
 
@@ -297,6 +309,8 @@ impl Primitive {
             Shape::Triangle(t) => t.normal(),
             Shape::Trunk(t) => t.normal_at(p),
             Shape::Crown(_) => DVec3::Z,
+            Shape::Terrain(t) => t.normal_at(p),
+            Shape::Voxel(v) => v.normal_at(p),
         }
     }
 }

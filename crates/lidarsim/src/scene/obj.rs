@@ -7,9 +7,14 @@
 //! `incidence_exponent` (default 1, Lambertian). Faces before any `usemtl`
 //! take the mesh entry's default material.
 //!
-//! Class of a face: the MTL key `class` of its material if present, else the
-//! first word of the OBJ object/group name that names a class (`g roof_1`,
-//! `o wall-north`), else the mesh entry's default class.
+//! Class of a face: the survey's `classes` table entry whose pattern matches
+//! the OBJ group/object name (`"wall*" = "wall"`; `*` matches any run of
+//! characters; an exact name wins over patterns, then the pattern with the
+//! most literal characters), else the MTL key `class` of its material, else
+//! the first word of the group/object name that names a class (`g roof_1`,
+//! `o wall-north`), else the mesh entry's default class. A pattern that
+//! matches no group or object of the file is an error (a typo would
+//! otherwise change nothing).
 
 use std::collections::HashMap;
 use std::io::BufReader;
@@ -80,6 +85,24 @@ pub enum MeshError {
     NoMaterial {
         /// OBJ file.
         path: PathBuf,
+    },
+    /// A glTF file could not be read or breaks the glTF 2.0 specification.
+    #[error("'{path}': {reason}")]
+    Gltf {
+        /// The glTF file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A `classes` pattern matches no group or object name of the file.
+    #[error("'{path}': no group or object name matches '{pattern}' (names in the file: {names})")]
+    UnmatchedClassPattern {
+        /// OBJ file.
+        path: PathBuf,
+        /// The pattern.
+        pattern: String,
+        /// The file's group/object names, comma separated.
+        names: String,
     },
     /// The file holds no usable triangle.
     #[error("'{path}' holds no triangle with three distinct, finite corners")]
@@ -157,6 +180,47 @@ pub struct MeshPlacement {
     pub default_class: SurfaceClass,
     /// Material for faces before any `usemtl` (a survey material name).
     pub default_material: Option<Material>,
+    /// Group/object name patterns and their classes (see the module
+    /// documentation).
+    pub class_map: Vec<(String, SurfaceClass)>,
+}
+
+/// Whether `name` matches `pattern`, where `*` stands for any run of
+/// characters (possibly empty) and everything else for itself.
+pub fn glob_match(pattern: &str, name: &str) -> bool {
+    let parts: Vec<&str> = pattern.split('*').collect();
+    if parts.len() == 1 {
+        return pattern == name;
+    }
+    let (first, last) = (parts[0], parts[parts.len() - 1]);
+    if name.len() < first.len() + last.len() || !name.starts_with(first) || !name.ends_with(last) {
+        return false;
+    }
+    let mut rest = &name[first.len()..name.len() - last.len()];
+    for part in &parts[1..parts.len() - 1] {
+        match rest.find(part) {
+            Some(i) => rest = &rest[i + part.len()..],
+            None => return false,
+        }
+    }
+    true
+}
+
+/// The class the `class_map` gives a group/object name: an exact name
+/// first, then the matching pattern with the most literal characters (the
+/// first in `map` order among equals).
+pub(crate) fn mapped_class(map: &[(String, SurfaceClass)], name: &str) -> Option<SurfaceClass> {
+    map.iter()
+        .enumerate()
+        .filter(|(_, (p, _))| glob_match(p, name))
+        .max_by_key(|(i, (p, _))| {
+            (
+                !p.contains('*'),
+                p.chars().filter(|c| *c != '*').count(),
+                std::cmp::Reverse(*i),
+            )
+        })
+        .map(|(_, (_, c))| *c)
 }
 
 /// Loads an OBJ file into `scene` as triangles belonging to a new object.
@@ -281,6 +345,22 @@ pub fn load_obj(
         .clone()
         .map(|m| scene.add_material(m));
 
+    for (pattern, _) in &placement.class_map {
+        if !models.iter().any(|m| glob_match(pattern, &m.name)) {
+            let mut names: Vec<&str> = models.iter().map(|m| m.name.as_str()).collect();
+            names.dedup();
+            return Err(MeshError::UnmatchedClassPattern {
+                path: path.to_path_buf(),
+                pattern: pattern.clone(),
+                names: if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    names.join(", ")
+                },
+            });
+        }
+    }
+
     let object = scene.add_object(format!("mesh:{}", path.display()));
     let rotation = DMat3::from_rotation_z(placement.rotation_z_rad);
     let place = |x: f64, y: f64, z: f64| {
@@ -307,7 +387,8 @@ pub fn load_obj(
                 }
             },
         };
-        let class = class_hint
+        let class = mapped_class(&placement.class_map, &model.name)
+            .or(class_hint)
             .or_else(|| class_from_name(&model.name))
             .unwrap_or(placement.default_class);
         let corner = |k: u32| {
@@ -392,7 +473,7 @@ fn mtl_to_material(m: &tobj::Material) -> Result<Material, MeshError> {
 }
 
 /// The first word of an OBJ object/group name that names a class.
-fn class_from_name(name: &str) -> Option<SurfaceClass> {
+pub(crate) fn class_from_name(name: &str) -> Option<SurfaceClass> {
     name.split(|c: char| !c.is_ascii_alphanumeric())
         .find_map(SurfaceClass::from_name)
 }
@@ -400,6 +481,91 @@ fn class_from_name(name: &str) -> Option<SurfaceClass> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn glob_patterns() {
+        assert!(glob_match("wall*", "wall_north"));
+        assert!(glob_match("wall*", "wall"));
+        assert!(!glob_match("wall*", "awall"));
+        assert!(glob_match("*roof*", "house_roof_2"));
+        assert!(glob_match("a*b*c", "axxbyyc"));
+        assert!(!glob_match("a*b*c", "axxcyyb"));
+        assert!(!glob_match("ab*ba", "aba"));
+        assert!(glob_match("roof", "roof") && !glob_match("roof", "roofs"));
+        let map = vec![
+            ("*".to_string(), SurfaceClass::Unclassified),
+            ("wall*".to_string(), SurfaceClass::Wall),
+            ("wall_glass".to_string(), SurfaceClass::Water),
+            ("w*".to_string(), SurfaceClass::Road),
+        ];
+        assert_eq!(mapped_class(&map, "wall_glass"), Some(SurfaceClass::Water));
+        assert_eq!(mapped_class(&map, "wall_1"), Some(SurfaceClass::Wall));
+        assert_eq!(mapped_class(&map, "window"), Some(SurfaceClass::Road));
+        assert_eq!(
+            mapped_class(&map, "chimney"),
+            Some(SurfaceClass::Unclassified)
+        );
+        assert_eq!(mapped_class(&map[1..], "chimney"), None);
+    }
+
+    #[test]
+    fn class_map_overrides_mtl_and_name_hints_and_unmatched_patterns_fail() {
+        let dir = std::env::temp_dir().join(format!("lidarsim-objmap-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("m.mtl"),
+            "newmtl tiles\nKd 0.5 0.5 0.5\nclass roof\n",
+        )
+        .unwrap();
+        std::fs::write(
+            dir.join("m.obj"),
+            "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nusemtl tiles\n\
+             g Dach_1\nf 1 2 3\ng Mauer_Nord\nf 1 2 3\ng wall_x\nf 1 2 3\ng other\nf 1 2 3\n",
+        )
+        .unwrap();
+        let placement = |map: &[(&str, SurfaceClass)]| MeshPlacement {
+            scale: 1.0,
+            rotation_z_rad: 0.0,
+            offset_m: DVec3::ZERO,
+            default_class: SurfaceClass::Ground,
+            default_material: None,
+            class_map: map.iter().map(|(p, c)| (p.to_string(), *c)).collect(),
+        };
+        let mut scene = Scene::default();
+        let map = [
+            ("Dach*", SurfaceClass::Bridge),
+            ("Mauer*", SurfaceClass::Wall),
+        ];
+        load_obj(
+            &dir.join("m.obj"),
+            &placement(&map),
+            &HashMap::new(),
+            &mut scene,
+        )
+        .unwrap();
+        let classes: Vec<SurfaceClass> = scene.primitives.iter().map(|p| p.class).collect();
+        // Dach_1 and Mauer_Nord by the map (over the MTL's roof); wall_x and
+        // other keep the MTL class.
+        assert_eq!(
+            classes,
+            [
+                SurfaceClass::Bridge,
+                SurfaceClass::Wall,
+                SurfaceClass::Roof,
+                SurfaceClass::Roof
+            ]
+        );
+        let e = load_obj(
+            &dir.join("m.obj"),
+            &placement(&[("Wand*", SurfaceClass::Wall)]),
+            &HashMap::new(),
+            &mut scene,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("'Wand*'") && e.contains("Mauer_Nord"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn class_hints_from_group_names() {
@@ -430,6 +596,7 @@ mod tests {
             offset_m: DVec3::new(10.0, 0.0, 0.0),
             default_class: SurfaceClass::Unclassified,
             default_material: None,
+            class_map: Vec::new(),
         };
         let (added, skipped) =
             load_obj(&dir.join("h.obj"), &placement, &HashMap::new(), &mut scene).unwrap();

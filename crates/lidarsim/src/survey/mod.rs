@@ -1100,6 +1100,170 @@ fn check_forest(
     })
 }
 
+/// Validates a `[[terrain]]` entry and adds its tiles to `scene`.
+#[allow(clippy::too_many_arguments)]
+fn check_terrain(
+    c: &mut Checker,
+    tp: &KeyPath,
+    t: &raw::RawTerrain,
+    materials: &HashMap<String, Material>,
+    base: &Path,
+    survey_seed: u64,
+    index: usize,
+    scene: &mut Scene,
+) {
+    let class = match &t.class {
+        None => SurfaceClass::Ground,
+        some => c.class(tp.key("class"), some),
+    };
+    let material = match &t.material {
+        None => {
+            c.err(
+                tp.key("material"),
+                "is required: the name of a [materials.NAME] table",
+            );
+            None
+        }
+        Some(m) => match materials.get(m) {
+            Some(mat) => Some(mat.clone()),
+            None => {
+                let mut names: Vec<&str> = materials.keys().map(String::as_str).collect();
+                names.sort();
+                c.err(
+                    tp.key("material"),
+                    format!("unknown material '{m}' (defined: {})", names.join(", ")),
+                );
+                None
+            }
+        },
+    };
+    let offset = match &t.offset_m {
+        None => Some(DVec3::ZERO),
+        some => c.point(tp.key("offset_m"), some),
+    };
+    let fbm_keys = [
+        ("extent_m", t.extent_m.is_some()),
+        ("resolution_m", t.resolution_m.is_some()),
+        ("relief_m", t.relief_m.is_some()),
+        ("wavelength_m", t.wavelength_m.is_some()),
+        ("octaves", t.octaves.is_some()),
+        ("seed", t.seed.is_some()),
+    ];
+    let grid = match (&t.file, &t.generator) {
+        (Some(_), Some(_)) => {
+            c.err(
+                tp.key("generator"),
+                "give either `file` (a raster) or `generator`, not both",
+            );
+            None
+        }
+        (None, None) => {
+            c.err(
+                tp.key("file"),
+                "is required: a GeoTIFF (.tif) or ESRI ASCII grid (.asc) file, or set \
+                 `generator = \"fbm\"`",
+            );
+            None
+        }
+        (Some(file), None) => {
+            for (key, set) in fbm_keys {
+                if set {
+                    c.err(
+                        tp.key(key),
+                        "belongs to `generator = \"fbm\"`; a raster `file` gives its own grid",
+                    );
+                }
+            }
+            match crate::scene::terrain::read_raster(&base.join(file)) {
+                Ok(g) => Some(g),
+                Err(e) => {
+                    c.err(tp.key("file"), e.to_string());
+                    None
+                }
+            }
+        }
+        (None, Some(generator)) if generator == "fbm" => {
+            let extent = match &t.extent_m {
+                Some(e)
+                    if e.len() == 4
+                        && e.iter().all(|v| v.is_finite())
+                        && e[2] > e[0]
+                        && e[3] > e[1] =>
+                {
+                    Some([e[0], e[1], e[2], e[3]])
+                }
+                Some(_) => {
+                    c.err(
+                        tp.key("extent_m"),
+                        "must be [xmin, ymin, xmax, ymax] in metres with xmax > xmin and \
+                         ymax > ymin",
+                    );
+                    None
+                }
+                None => {
+                    c.err(
+                        tp.key("extent_m"),
+                        "is required: [xmin, ymin, xmax, ymax] in metres",
+                    );
+                    None
+                }
+            };
+            let resolution_m = c.positive(tp.key("resolution_m"), t.resolution_m, 1.0, " m");
+            let relief_m = c.number(tp.key("relief_m"), t.relief_m, 20.0, 0.0, false, 1e4, " m");
+            let octaves = c.count(tp.key("octaves"), t.octaves, 6, 1, 16) as u32;
+            let Some(extent) = extent else { return };
+            let wavelength_m = c.positive(
+                tp.key("wavelength_m"),
+                t.wavelength_m,
+                ((extent[2] - extent[0]).max(extent[3] - extent[1]) / 2.0).max(resolution_m),
+                " m",
+            );
+            let spec = crate::scene::terrain::FbmSpec {
+                extent_m: extent,
+                resolution_m,
+                relief_m,
+                wavelength_m,
+                octaves,
+                seed: t.seed.unwrap_or_else(|| {
+                    crate::rng::mix64(survey_seed.wrapping_add(0x7E_4A1 + index as u64))
+                }),
+            };
+            let (cols, rows) = spec.nodes();
+            if cols < 2 || rows < 2 {
+                c.err(
+                    tp.key("resolution_m"),
+                    format!("{resolution_m} m leaves fewer than 2 × 2 grid nodes in the extent"),
+                );
+                return;
+            }
+            match crate::scene::terrain::generate_fbm(&spec) {
+                Ok(g) => Some(g),
+                Err(e) => {
+                    c.err(tp.key("resolution_m"), e.to_string());
+                    None
+                }
+            }
+        }
+        (None, Some(other)) => {
+            c.err(
+                tp.key("generator"),
+                format!("unknown generator '{other}'; expected \"fbm\""),
+            );
+            None
+        }
+    };
+    let (Some(mut grid), Some(material), Some(offset)) = (grid, material, offset) else {
+        return;
+    };
+    grid.shift(offset);
+    let m = scene.add_material(material);
+    let name = match &t.file {
+        Some(f) => format!("terrain[{index}]:{f}"),
+        None => format!("terrain[{index}]:fbm"),
+    };
+    crate::scene::terrain::add_terrain(scene, grid, m, class, name);
+}
+
 impl Survey {
     /// Reads and validates a survey file. Mesh paths are relative to it.
     pub fn load(path: &Path) -> Result<Self, SurveyError> {
@@ -1774,9 +1938,21 @@ impl Survey {
                 },
             };
             let Some(file) = &mesh.file else {
-                c.err(mp.key("file"), "is required: path of an OBJ file");
+                c.err(
+                    mp.key("file"),
+                    "is required: path of an OBJ, glTF (.gltf) or binary glTF (.glb) file",
+                );
                 continue;
             };
+            let mut class_map = Vec::new();
+            for (pattern, name) in mesh.classes.iter().flatten() {
+                let key = mp.key("classes").key(pattern);
+                if pattern.is_empty() {
+                    c.err(key, "an empty pattern matches nothing");
+                    continue;
+                }
+                class_map.push((pattern.clone(), c.class(key, &Some(name.clone()))));
+            }
             let Some(offset) = offset else { continue };
             let placement = MeshPlacement {
                 scale,
@@ -1784,10 +1960,79 @@ impl Survey {
                 offset_m: offset,
                 default_class: class,
                 default_material,
+                class_map,
             };
             let full = base.join(file);
-            if let Err(e) = load_obj(&full, &placement, &materials, &mut scene) {
-                c.err(mp.key("file"), e.to_string());
+            let is_gltf = full
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
+            let loaded = if is_gltf {
+                crate::scene::load_gltf(&full, &placement, &materials, &mut scene)
+            } else {
+                load_obj(&full, &placement, &materials, &mut scene)
+            };
+            if let Err(e) = loaded {
+                let key = match &e {
+                    crate::scene::MeshError::UnmatchedClassPattern { pattern, .. } => {
+                        mp.key("classes").key(pattern)
+                    }
+                    _ => mp.key("file"),
+                };
+                c.err(key, e.to_string());
+            }
+        }
+        for (i, t) in raw.terrains.iter().enumerate() {
+            let tp = root.key("terrain").index(i);
+            check_terrain(&mut c, &tp, t, &materials, &base, seed, i, &mut scene);
+        }
+        for (i, pc) in raw.point_clouds.iter().enumerate() {
+            let pp = root.key("point_cloud").index(i);
+            let class = pc
+                .class
+                .as_ref()
+                .map(|_| c.class(pp.key("class"), &pc.class));
+            let voxel_m = c.number(pp.key("voxel_m"), pc.voxel_m, 0.5, 0.0, true, 1000.0, " m");
+            let offset = match &pc.offset_m {
+                None => Some(DVec3::ZERO),
+                some => c.point(pp.key("offset_m"), some),
+            };
+            let material = match &pc.material {
+                None => {
+                    c.err(
+                        pp.key("material"),
+                        "is required: the name of a [materials.NAME] table",
+                    );
+                    None
+                }
+                Some(m) => match materials.get(m) {
+                    Some(mat) => Some(mat.clone()),
+                    None => {
+                        c.err(
+                            pp.key("material"),
+                            format!("unknown material '{m}' ({})", known(&materials)),
+                        );
+                        None
+                    }
+                },
+            };
+            let Some(file) = &pc.file else {
+                c.err(pp.key("file"), "is required: path of a LAS or LAZ file");
+                continue;
+            };
+            let (Some(material), Some(offset)) = (material, offset) else {
+                continue;
+            };
+            let placement = crate::scene::cloud::CloudPlacement {
+                voxel_m,
+                offset_m: offset,
+                material: scene.add_material(material),
+                class,
+            };
+            if let Err(e) =
+                crate::scene::cloud::load_point_cloud(&base.join(file), &placement, &mut scene)
+            {
+                c.err(pp.key("file"), e.to_string());
             }
         }
         // [vegetation], [[tree]], [[forest]]
@@ -2019,7 +2264,8 @@ impl Survey {
         if scene.primitives.is_empty() && c.problems.is_empty() {
             c.err(
                 root,
-                "the scene is empty: add [[polygon]], [[mesh]], [[tree]] or [[forest]] entries \
+                "the scene is empty: add [[polygon]], [[mesh]], [[terrain]], [[point_cloud]], \
+                 [[tree]] or [[forest]] entries \
                  for the laser to hit",
             );
         }
@@ -2276,5 +2522,72 @@ vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
         let d = diagnostics(&warped);
         assert!(d[0].message.contains("not planar"), "{}", d[0].message);
         assert_eq!(d[0].line, 13);
+    }
+
+    #[test]
+    fn mesh_class_patterns_map_groups_and_name_their_key() {
+        let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/x.toml");
+        let text = |classes: &str| {
+            format!(
+                "[[flight_line]]\nstart_m = [0, -50, 300]\nend_m = [0, 50, 300]\nspeed_mps = 50\n\
+                 [[mesh]]\nfile = \"house.obj\"\nclass = \"roof\"\nclasses = {{ {classes} }}\n"
+            )
+        };
+        let s = Survey::from_toml(&text("\"wall*\" = \"bridge\""), Some(&base))
+            .unwrap_or_else(|e| panic!("{e}"));
+        let count = |c: SurfaceClass| s.scene.primitives.iter().filter(|p| p.class == c).count();
+        // house.obj: the gable walls (south, north) are pentagons of three
+        // triangles, east and west quads of two: 10 triangles become
+        // bridge, no wall is left.
+        assert_eq!(count(SurfaceClass::Bridge), 10);
+        assert_eq!(count(SurfaceClass::Wall), 0);
+        assert!(count(SurfaceClass::Roof) > 0);
+
+        let e = Survey::from_toml(&text("\"wal*\" = \"wall\", roofs = \"roof\""), Some(&base))
+            .unwrap_err();
+        assert_eq!(e.diagnostics.len(), 1, "{e}");
+        assert_eq!(e.diagnostics[0].key, "mesh[0].classes.roofs");
+        assert!(
+            e.diagnostics[0]
+                .message
+                .contains("no group or object name matches 'roofs'")
+        );
+        assert_eq!(e.diagnostics[0].line, 8);
+        let e = Survey::from_toml(&text("\"wall*\" = \"lava\""), Some(&base)).unwrap_err();
+        assert!(
+            e.diagnostics[0].message.contains("unknown class 'lava'"),
+            "{e}"
+        );
+        assert_eq!(e.diagnostics[0].line, 8);
+    }
+
+    #[test]
+    fn terrain_example_loads_with_trees_on_the_terrain() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/terrain.toml");
+        let s = Survey::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let b = s.scene.bounds();
+        // The fBm terrain: extent [-300, -200, 300, 200] on a 2 m grid,
+        // relief 35 m from z = 0; tree crowns reach higher.
+        assert_eq!(
+            (b.min.x, b.min.y, b.max.x, b.max.y),
+            (-300.0, -200.0, 300.0, 200.0)
+        );
+        assert_eq!(b.min.z, 0.0);
+        let terrain = s
+            .scene
+            .primitives
+            .iter()
+            .filter(|p| matches!(p.shape, Shape::Terrain(_)))
+            .count();
+        // 300 × 200 cells in 16-cell tiles: ceil(300/16) × ceil(200/16).
+        assert_eq!(terrain, 19 * 13);
+        // Every trunk stands on the terrain: its base is within the relief.
+        for p in &s.scene.primitives {
+            if let Shape::Trunk(_) = &p.shape {
+                let z = p.bounds().min.z;
+                assert!((0.0..=35.0001).contains(&z), "trunk base at {z}");
+            }
+        }
+        assert!(s.forest_trees[0] > 1000, "{:?}", s.forest_trees);
     }
 }

@@ -47,6 +47,12 @@ pub struct RawSurvey {
     /// `[[mesh]]`.
     #[serde(default, rename = "mesh", skip_serializing_if = "Vec::is_empty")]
     pub meshes: Vec<RawMesh>,
+    /// `[[terrain]]`: height grids from rasters or a generator.
+    #[serde(default, rename = "terrain", skip_serializing_if = "Vec::is_empty")]
+    pub terrains: Vec<RawTerrain>,
+    /// `[[point_cloud]]`: LAS/LAZ clouds turned into voxels.
+    #[serde(default, rename = "point_cloud", skip_serializing_if = "Vec::is_empty")]
+    pub point_clouds: Vec<RawPointCloud>,
     /// `[gnss]`: position errors of the observed trajectory.
     #[serde(default, skip_serializing_if = "RawErrors::is_empty")]
     pub gnss: RawErrors,
@@ -232,6 +238,56 @@ pub struct RawMesh {
     pub class: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub material: Option<String>,
+    /// Group/object name pattern (`*` matches any run of characters) →
+    /// class.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub classes: Option<BTreeMap<String, String>>,
+}
+
+/// `[[terrain]]`: a raster DEM (`file`) or a generated one (`generator`).
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawTerrain {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub generator: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub extent_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub resolution_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub relief_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub wavelength_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub octaves: Option<i64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub class: Option<String>,
+}
+
+/// `[[point_cloud]]`: a LAS/LAZ cloud loaded as voxels.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawPointCloud {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub file: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub voxel_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub offset_m: Option<Vec<f64>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub material: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub class: Option<String>,
 }
 
 /// `[vegetation]`.

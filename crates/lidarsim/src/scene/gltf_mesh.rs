@@ -1,0 +1,238 @@
+//! Triangle meshes from glTF 2.0 files (`.gltf` with embedded or external
+//! buffers, or binary `.glb`), read with the `gltf` crate.
+//!
+//! The default scene (else the first) is walked from its root nodes; each
+//! node's local transform (matrix, or translation · rotation · scale) is
+//! applied after its parent's. Triangles, triangle strips and fans are
+//! read; points and lines are skipped.
+//!
+//! Axes (glTF 2.0 §3.4): glTF is right-handed with +Y up and the front of
+//! an asset facing +Z, in metres. Our world is X east, Y north, Z up, so a
+//! glTF point `(x, y, z)` becomes `(x, −z, y)` — a rotation of +90° about
+//! X, the inverse of what Blender's exporter applies, so Blender's own
+//! coordinates come back. The `[[mesh]]` placement (scale, rotation about
+//! the vertical, offset) follows.
+//!
+//! Material of a primitive: the survey's `[materials.NAME]` for the glTF
+//! material's name, else the glTF material itself (reflectance = mean of
+//! the base colour factor's RGB, Lambertian), else the mesh entry's default
+//! material. Class: the entry's `classes` pattern matching the node name,
+//! then the mesh name; else the first word of the material, node or mesh
+//! name that names a class; else the entry's default class.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use super::obj::{MeshError, MeshPlacement, class_from_name, glob_match, mapped_class};
+use super::{Material, Primitive, Scene, Shape, Triangle};
+use crate::geometry::{DMat3, DVec3};
+use glam::DMat4;
+
+/// glTF (x, y, z) → world (x, −z, y).
+fn gltf_to_world(p: DVec3) -> DVec3 {
+    DVec3::new(p.x, -p.z, p.y)
+}
+
+/// Loads a glTF 2.0 file into `scene` as triangles of a new object;
+/// returns (triangles added, degenerate triangles skipped).
+pub fn load_gltf(
+    path: &Path,
+    placement: &MeshPlacement,
+    survey_materials: &HashMap<String, Material>,
+    scene: &mut Scene,
+) -> Result<(usize, usize), MeshError> {
+    let fail = |reason: String| MeshError::Gltf {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let gltf::Gltf { document, blob } = gltf::Gltf::open(path).map_err(|e| match e {
+        gltf::Error::Io(source) => MeshError::Read {
+            path: path.to_path_buf(),
+            source,
+        },
+        other => fail(format!("not a valid glTF 2.0 file: {other}")),
+    })?;
+    let buffers = gltf::import_buffers(&document, path.parent(), blob)
+        .map_err(|e| fail(format!("cannot load its buffers: {e}")))?;
+    let Some(root) = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    else {
+        return Err(fail("has no scene".to_string()));
+    };
+
+    // Nodes with their world matrices, depth first.
+    let mut nodes: Vec<(gltf::Node, DMat4)> = Vec::new();
+    let mut stack: Vec<(gltf::Node, DMat4, usize)> =
+        root.nodes().map(|n| (n, DMat4::IDENTITY, 0)).collect();
+    while let Some((node, parent, depth)) = stack.pop() {
+        if depth > 256 {
+            return Err(fail(
+                "node hierarchy deeper than 256 levels (a cycle?)".to_string(),
+            ));
+        }
+        let m = node.transform().matrix();
+        let local = DMat4::from_cols_array_2d(&m.map(|c| c.map(f64::from)));
+        let world = parent * local;
+        for child in node.children() {
+            stack.push((child, world, depth + 1));
+        }
+        nodes.push((node, world));
+    }
+    let names_of = |node: &gltf::Node| -> Vec<String> {
+        let mut names = Vec::new();
+        if let Some(n) = node.name() {
+            names.push(n.to_string());
+        }
+        if let Some(n) = node.mesh().and_then(|m| m.name().map(str::to_string)) {
+            names.push(n);
+        }
+        names
+    };
+    for (pattern, _) in &placement.class_map {
+        if !nodes
+            .iter()
+            .filter(|(n, _)| n.mesh().is_some())
+            .any(|(n, _)| names_of(n).iter().any(|name| glob_match(pattern, name)))
+        {
+            let mut all: Vec<String> = nodes
+                .iter()
+                .filter(|(n, _)| n.mesh().is_some())
+                .flat_map(|(n, _)| names_of(n))
+                .collect();
+            all.dedup();
+            return Err(MeshError::UnmatchedClassPattern {
+                path: path.to_path_buf(),
+                pattern: pattern.clone(),
+                names: if all.is_empty() {
+                    "none".to_string()
+                } else {
+                    all.join(", ")
+                },
+            });
+        }
+    }
+
+    let default_material = placement
+        .default_material
+        .clone()
+        .map(|m| scene.add_material(m));
+    let object = scene.add_object(format!("mesh:{}", path.display()));
+    let rotation = DMat3::from_rotation_z(placement.rotation_z_rad);
+    let (mut added, mut skipped) = (0usize, 0usize);
+    for (node, world) in &nodes {
+        let Some(mesh) = node.mesh() else { continue };
+        let names = names_of(node);
+        for (k, prim) in mesh.primitives().enumerate() {
+            let what = || {
+                format!(
+                    "mesh '{}' primitive {k}",
+                    mesh.name()
+                        .map_or_else(|| mesh.index().to_string(), str::to_string)
+                )
+            };
+            let mat = prim.material();
+            let material = match mat.name() {
+                Some(name) if survey_materials.contains_key(name) => {
+                    Some(scene.add_material(survey_materials[name].clone()))
+                }
+                _ if mat.index().is_some() => {
+                    let name = mat.name().map_or_else(
+                        || format!("gltf material {}", mat.index().unwrap_or(0)),
+                        str::to_string,
+                    );
+                    let c = mat.pbr_metallic_roughness().base_color_factor();
+                    let reflectance = f64::from(c[0] + c[1] + c[2]) / 3.0;
+                    if !(0.0..=1.0).contains(&reflectance) {
+                        return Err(fail(format!(
+                            "material '{name}': base colour gives reflectance {reflectance}, \
+                             outside 0–1"
+                        )));
+                    }
+                    Some(scene.add_material(Material {
+                        name,
+                        reflectance,
+                        incidence_exponent: 1.0,
+                    }))
+                }
+                _ => default_material,
+            };
+            let Some(material) = material else {
+                return Err(fail(format!(
+                    "{} has no material; set the mesh's `material` key",
+                    what()
+                )));
+            };
+            let class = names
+                .iter()
+                .find_map(|n| mapped_class(&placement.class_map, n))
+                .or_else(|| mat.name().and_then(class_from_name))
+                .or_else(|| names.iter().find_map(|n| class_from_name(n)))
+                .unwrap_or(placement.default_class);
+            let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+            let Some(positions) = reader.read_positions() else {
+                return Err(fail(format!("{} has no POSITION attribute", what())));
+            };
+            let positions: Vec<DVec3> = positions
+                .map(|p| {
+                    let local = world.transform_point3(DVec3::new(
+                        f64::from(p[0]),
+                        f64::from(p[1]),
+                        f64::from(p[2]),
+                    ));
+                    rotation * (gltf_to_world(local) * placement.scale) + placement.offset_m
+                })
+                .collect();
+            let indices: Vec<u32> = match reader.read_indices() {
+                Some(i) => i.into_u32().collect(),
+                None => (0..positions.len() as u32).collect(),
+            };
+            let corner = |i: u32| positions.get(i as usize).copied();
+            let triangles: Vec<[u32; 3]> = match prim.mode() {
+                gltf::mesh::Mode::Triangles => indices
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect(),
+                gltf::mesh::Mode::TriangleStrip => (2..indices.len())
+                    .map(|i| {
+                        if i % 2 == 0 {
+                            [indices[i - 2], indices[i - 1], indices[i]]
+                        } else {
+                            [indices[i - 1], indices[i - 2], indices[i]]
+                        }
+                    })
+                    .collect(),
+                gltf::mesh::Mode::TriangleFan => (2..indices.len())
+                    .map(|i| [indices[0], indices[i - 1], indices[i]])
+                    .collect(),
+                _ => Vec::new(),
+            };
+            for [a, b, c] in triangles {
+                let (Some(a), Some(b), Some(c)) = (corner(a), corner(b), corner(c)) else {
+                    return Err(fail(format!(
+                        "{}: an index points past its vertices",
+                        what()
+                    )));
+                };
+                match Triangle::new(a, b, c) {
+                    Some(t) => {
+                        scene.primitives.push(Primitive {
+                            shape: Shape::Triangle(t),
+                            material,
+                            class,
+                            object,
+                        });
+                        added += 1;
+                    }
+                    None => skipped += 1,
+                }
+            }
+        }
+    }
+    if added == 0 {
+        return Err(MeshError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    Ok((added, skipped))
+}
