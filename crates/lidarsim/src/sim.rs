@@ -4,17 +4,16 @@
 //! pose at `t_k` ∘ mirror angle at `t_k` → central ray and sub-rays →
 //! closest hits → Eq. 2 per sub-ray (with speckle) → waveform → echoes →
 //! georeferenced points (Eq. 1 on the central ray) with ground-truth
-//! classes. Pulses are independent; blocks of pulses run in parallel on a
-//! rayon pool and are handed to the sinks in pulse order by a writer
-//! thread, so the output is the same for any number of threads and memory
-//! does not grow with the length of the flight.
+//! classes. Pulses are independent; blocks of pulses run in parallel on
+//! worker threads and are handed to the sinks in pulse order, so the output
+//! is the same for any number of threads and memory does not grow with the
+//! length of the flight.
 
 use std::io;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
+use std::sync::{Condvar, Mutex};
 use std::time::Instant;
-
-use rayon::prelude::*;
 
 use crate::accel::{PulseTrace, RayCaster, VolumeSpan};
 use crate::canopy::{CanopyConfig, Fate, march};
@@ -488,7 +487,8 @@ impl<'a> Simulator<'a> {
 
     /// [`Simulator::run`] from `control.start` on, stopping at the next
     /// block boundary once `control.stop` is set (checked before every
-    /// batch of blocks; the blocks already simulated are written first).
+    /// block a worker takes; the blocks already simulated are written
+    /// first, as far as they follow each other).
     /// The counts are those of the pulses simulated by this call; the
     /// outcome says where it stopped, if it did.
     pub fn run_from(
@@ -498,85 +498,125 @@ impl<'a> Simulator<'a> {
         progress: &(dyn Fn(u64) + Sync),
         control: &RunControl<'_>,
     ) -> io::Result<RunOutcome> {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads.max(1))
-            .build()
-            .map_err(io::Error::other)?;
-        let batch_pulses = 4 * threads.max(1) as u64 * BLOCK_PULSES;
+        let threads = threads.max(1);
+        // The blocks to simulate, in output order, within the pulse budget
+        // (a block is taken while fewer pulses than the budget precede it).
+        let mut jobs: Vec<(usize, u64, u64)> = Vec::new();
+        let mut budget_end = None;
+        let mut sent = 0u64;
+        'lines: for (l, line) in self
+            .survey
+            .lines
+            .iter()
+            .enumerate()
+            .skip(control.start.line)
+        {
+            let n = self.survey.pulses_of(line);
+            let mut k = if l == control.start.line {
+                control.start.pulse.min(n)
+            } else {
+                0
+            };
+            while k < n {
+                if control.pulse_budget.is_some_and(|b| sent >= b) {
+                    budget_end = Some(PulsePosition { line: l, pulse: k });
+                    break 'lines;
+                }
+                let k1 = (k + BLOCK_PULSES).min(n);
+                jobs.push((l, k, k1));
+                sent += k1 - k;
+                k = k1;
+            }
+        }
+        let stopped = || control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
+
+        // Workers take the blocks in order from a shared counter, at most
+        // `window` blocks ahead of the writer, which puts them back in
+        // order: no barrier between batches, memory bounded by the window.
+        let window = 4 * threads;
+        let next_job = AtomicUsize::new(0);
+        let abort = AtomicBool::new(false);
+        let written = (Mutex::new(0usize), Condvar::new());
         type Block = (Vec<PointRecord>, RunCounts, WaveformBlock);
-        let (tx, rx) = mpsc::sync_channel::<Vec<Block>>(2);
-        let stopped = |stop: Option<&AtomicBool>| stop.is_some_and(|s| s.load(Ordering::SeqCst));
+        let (tx, rx) = mpsc::channel::<(usize, Block)>();
         std::thread::scope(|scope| {
-            let writer = scope.spawn(move || -> io::Result<RunCounts> {
-                let mut total = RunCounts::default();
-                for batch in rx {
-                    for (points, counts, waveforms) in batch {
-                        for sink in sinks.iter_mut() {
-                            sink.write_block(&points, &waveforms)?;
+            for _ in 0..threads {
+                let tx = tx.clone();
+                let (jobs, next_job, abort, written) = (&jobs, &next_job, &abort, &written);
+                scope.spawn(move || {
+                    let mut scratch = Scratch::default();
+                    loop {
+                        if stopped() || abort.load(Ordering::SeqCst) {
+                            return;
                         }
-                        total.add(&counts);
+                        let j = next_job.fetch_add(1, Ordering::SeqCst);
+                        let Some(&(l, k0, k1)) = jobs.get(j) else {
+                            return;
+                        };
+                        // Wait until the writer is within the window.
+                        {
+                            let (lock, cv) = written;
+                            let mut w = lock.lock().unwrap_or_else(|e| e.into_inner());
+                            while j >= *w + window && !abort.load(Ordering::SeqCst) {
+                                w = cv.wait(w).unwrap_or_else(|e| e.into_inner());
+                            }
+                        }
+                        let line = &self.survey.lines[l];
+                        let mut waves = WaveformBlock::default();
+                        let record = self.record_waveforms.then_some(&mut waves);
+                        let (points, counts) =
+                            self.simulate_block_recording(line, k0, k1, &mut scratch, record);
+                        if tx.send((j, (points, counts, waves))).is_err() {
+                            return;
+                        }
                     }
-                    progress(total.pulses);
-                }
-                Ok(total)
-            });
-            let mut send_failed = false;
-            let mut stopped_at = None;
-            let mut sent = 0u64;
-            'lines: for (l, line) in self
-                .survey
-                .lines
-                .iter()
-                .enumerate()
-                .skip(control.start.line)
-            {
-                let n = self.survey.pulses_of(line);
-                let mut k = if l == control.start.line {
-                    control.start.pulse.min(n)
-                } else {
-                    0
-                };
-                while k < n {
-                    let left = control.pulse_budget.map(|b| b.saturating_sub(sent));
-                    if stopped(control.stop) || left == Some(0) {
-                        stopped_at = Some(PulsePosition { line: l, pulse: k });
-                        break 'lines;
-                    }
-                    // Within the budget, rounded up to whole blocks.
-                    let room = left.map_or(u64::MAX, |p| p.div_ceil(BLOCK_PULSES) * BLOCK_PULSES);
-                    let k_end = (k + batch_pulses.min(room)).min(n);
-                    let starts: Vec<u64> = (k..k_end).step_by(BLOCK_PULSES as usize).collect();
-                    let batch: Vec<_> = pool.install(|| {
-                        starts
-                            .into_par_iter()
-                            .map_init(Scratch::default, |scratch, k0| {
-                                let k1 = (k0 + BLOCK_PULSES).min(n);
-                                let mut waves = WaveformBlock::default();
-                                let record = self.record_waveforms.then_some(&mut waves);
-                                let (points, counts) =
-                                    self.simulate_block_recording(line, k0, k1, scratch, record);
-                                (points, counts, waves)
-                            })
-                            .collect()
-                    });
-                    if tx.send(batch).is_err() {
-                        send_failed = true;
-                        break 'lines;
-                    }
-                    sent += k_end - k;
-                    k = k_end;
-                }
+                });
             }
-            // A stop requested after the last batch changes nothing: the
-            // run is complete.
             drop(tx);
-            let result = writer
-                .join()
-                .unwrap_or_else(|_| Err(io::Error::other("the writer thread panicked")));
-            if send_failed && result.is_ok() {
-                return Err(io::Error::other("the writer thread stopped early"));
+            // The writer: blocks in job order to every sink.
+            let mut total = RunCounts::default();
+            let mut pending = std::collections::BTreeMap::new();
+            let mut done = 0usize;
+            let mut result = Ok(());
+            for (j, block) in rx.iter() {
+                pending.insert(j, block);
+                while let Some((points, counts, waves)) = pending.remove(&done) {
+                    for sink in sinks.iter_mut() {
+                        if let Err(e) = sink.write_block(&points, &waves) {
+                            result = Err(e);
+                            break;
+                        }
+                    }
+                    if result.is_err() {
+                        break;
+                    }
+                    total.add(&counts);
+                    done += 1;
+                    let (lock, cv) = &written;
+                    *lock.lock().unwrap_or_else(|e| e.into_inner()) = done;
+                    cv.notify_all();
+                }
+                if result.is_err() {
+                    let (lock, cv) = &written;
+                    let _held = lock.lock().unwrap_or_else(|e| e.into_inner());
+                    abort.store(true, Ordering::SeqCst);
+                    cv.notify_all();
+                    break;
+                }
+                progress(total.pulses);
             }
-            result.map(|counts| RunOutcome { counts, stopped_at })
+            drop(rx);
+            result?;
+            // Stopped early when blocks remain unwritten; a stop requested
+            // after the last block changes nothing.
+            let stopped_at = match jobs.get(done) {
+                Some(&(l, k0, _)) => Some(PulsePosition { line: l, pulse: k0 }),
+                None => budget_end,
+            };
+            Ok(RunOutcome {
+                counts: total,
+                stopped_at,
+            })
         })
     }
 }
