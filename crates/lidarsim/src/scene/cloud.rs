@@ -158,13 +158,20 @@ pub fn load_point_cloud(
         .len();
     let mut reader = las::Reader::from_path(path).map_err(bad)?;
     // The header's point count against the file's size, before reading:
-    // a LAZ point takes at least a byte, a LAS point its record length.
+    // a LAS point takes its record length. (LAZ can pack a smooth cloud
+    // into less than a byte per point: not checked, its reader stops at
+    // the end of the data.)
     let header = reader.header();
     let count = header.number_of_points();
     let record = u64::from(header.point_format().len());
-    let compressed = header.point_format().is_compressed;
+    let compressed = header.point_format().is_compressed
+        || header.vlrs().iter().any(|v| v.user_id == "laszip encoded")
+        || path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
     match count.checked_mul(record) {
-        Some(bytes) if bytes <= size || (compressed && count <= size) => {}
+        Some(bytes) if bytes <= size || compressed => {}
         _ => {
             return Err(CloudError::Read {
                 path: path.to_path_buf(),
