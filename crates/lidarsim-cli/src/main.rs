@@ -596,11 +596,17 @@ fn read_cloud(cloud: &Path) -> Result<Vec<lidarsim::render::RenderPoint>, String
     let header = reader.header();
     let count = header.number_of_points();
     let record = u64::from(header.point_format().len());
-    // Compressed (LAZ) points take less room than their records, but not
-    // less than a byte each.
-    let compressed = header.point_format().is_compressed;
+    // Compressed (LAZ) points take less room than their records — a smooth
+    // cloud less than a byte each: not checked, the LAZ reader stops at the
+    // end of its data.
+    let compressed = header.point_format().is_compressed
+        || header.vlrs().iter().any(|v| v.user_id == "laszip encoded")
+        || cloud
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
     match count.checked_mul(record) {
-        Some(bytes) if bytes <= size || (compressed && count <= size) => {}
+        Some(bytes) if bytes <= size || compressed => {}
         _ => {
             return Err(format!(
                 "{}: the header counts {count} points of {record} bytes, more than the file's \

@@ -345,3 +345,332 @@ fn broken_las_files_for_render() {
     std::fs::remove_dir_all(&dir).ok();
     print(&seen);
 }
+
+/// A survey naming one file of the corpus as `[[KIND]] file` (line 10).
+const FILE_SURVEY: &str = r#"[[flight_line]]
+start_m = [0.0, -50.0, 300.0]
+end_m = [0.0, 50.0, 300.0]
+speed_mps = 50.0
+
+[materials.grass]
+reflectance = 0.4
+
+[[KIND]]
+file = "FILE"
+material = "grass"
+"#;
+
+/// Feeds every file of `folder` (with `cases` = (file, reason)) as the
+/// `file` of a `[[kind]]` entry; the valid `good` baseline must pass
+/// `check`, so each broken file fails for its own defect.
+fn reject_files(folder: &str, kind: &str, good: &str, cases: &[(&str, &str)]) {
+    let dir = temp(folder);
+    let template = FILE_SURVEY.replace("KIND", kind);
+    let good_survey = survey_with(&dir, &template, &corpus().join(folder).join(good));
+    let o = lidarsim(&["check".as_ref(), good_survey.as_os_str()]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{folder}/{good}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let key = format!("`{kind}[0].file`");
+    let mut seen = Vec::new();
+    for (file, reason) in cases {
+        let path = corpus().join(folder).join(file);
+        let survey = survey_with(&dir, &template, &path);
+        reject_survey(
+            &format!("{folder}/{file}"),
+            &survey,
+            &["survey.toml:10:8", &key, file, reason],
+            &mut seen,
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+    print(&seen);
+}
+
+#[test]
+fn broken_geotiffs() {
+    reject_files(
+        "geotiff",
+        "terrain",
+        "good.tif",
+        &[
+            (
+                "truncated.tif",
+                "the file ends early: it is truncated or not a TIFF",
+            ),
+            (
+                "not_a_tiff.tif",
+                "not a readable TIFF: format error: TIFF signature not found",
+            ),
+            (
+                "no_geotags.tif",
+                "is not georeferenced: it has neither ModelPixelScaleTag + ModelTiepointTag nor \
+                 ModelTransformationTag",
+            ),
+            (
+                "rotated.tif",
+                "ModelTransformationTag rotates or shears the pixel grid",
+            ),
+            (
+                "one_pixel.tif",
+                "a terrain needs at least 2 × 2 cells, got 1 × 1",
+            ),
+            ("all_nan.tif", "every cell is nodata"),
+            (
+                "huge_dimensions.tif",
+                "4000000000 × 4000000000 cells exceed the limit of 100000000 cells",
+            ),
+            (
+                "huge_strip.tif",
+                "the header declares 9000 × 9000 uncompressed pixels of 32 bits (324000000 \
+                 bytes), more than the file's 266 bytes",
+            ),
+            (
+                "huge_tag.tif",
+                "a tag declares more values than a GeoTIFF DEM can hold",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn broken_ascii_grids() {
+    reject_files(
+        "asc",
+        "terrain",
+        "good.asc",
+        &[
+            ("missing_nrows.asc", "the header has no 'nrows'"),
+            (
+                "negative_cellsize.asc",
+                "line 5: 'cellsize' must be greater than 0, got -2",
+            ),
+            (
+                "zero_cellsize.asc",
+                "line 5: 'cellsize' must be greater than 0, got 0",
+            ),
+            (
+                "too_few_values.asc",
+                "line 7: expected ncols × nrows = 3 × 2 = 6 values, found 5",
+            ),
+            (
+                "too_many_values.asc",
+                "line 7: more values than ncols × nrows = 3 × 2",
+            ),
+            ("non_numeric.asc", "line 7: 'five' is not a number"),
+            (
+                "huge.asc",
+                "1000000000 × 1000000000 cells exceed the limit of 100000000 cells",
+            ),
+            (
+                "fractional_ncols.asc",
+                "line 1: 'ncols' must be a positive whole number, got 2.5",
+            ),
+            (
+                "nan_header.asc",
+                "line 3: header key 'xllcorner' must be finite",
+            ),
+            ("non_utf8.asc", "line 7: not valid UTF-8 (byte 3)"),
+            ("empty.asc", "the header has no 'ncols'"),
+        ],
+    );
+}
+
+#[test]
+fn broken_gltf_meshes() {
+    reject_files(
+        "gltf",
+        "mesh",
+        "good.glb",
+        &[
+            ("truncated.glb", "not a valid glTF 2.0 file"),
+            (
+                "bad_magic.glb",
+                "is not a binary glTF (GLB): it does not start with the magic 'glTF'",
+            ),
+            ("empty.glb", "is empty"),
+            (
+                "not_gltf.gltf",
+                "not a valid glTF 2.0 file: missing field `asset`",
+            ),
+            (
+                "missing_buffer.gltf",
+                "cannot load its buffers: No such file or directory",
+            ),
+            (
+                "buffer_too_short.glb",
+                "cannot load its buffers: buffer 0: expected 60 bytes but received 24 bytes",
+            ),
+            (
+                "accessor_past_buffer.glb",
+                "accessor 0 counts 1000 elements of 12 bytes, past the end of buffer view 0 \
+                 (48 bytes)",
+            ),
+            (
+                "huge_count.glb",
+                "accessor 0 counts 4611686018427387904 elements of 12 bytes, past the end",
+            ),
+            ("zero_count.glb", "accessor 1 counts no element"),
+            (
+                "nan_positions.glb",
+                "holds no triangle with three distinct, finite corners",
+            ),
+            (
+                "index_out_of_range.glb",
+                "primitive 0: an index points past its vertices",
+            ),
+        ],
+    );
+}
+
+#[test]
+fn broken_point_clouds() {
+    reject_files(
+        "cloud",
+        "point_cloud",
+        "good.las",
+        &[
+            (
+                "empty.las",
+                "the file ends early: it is truncated or not a LAS file",
+            ),
+            (
+                "truncated.las",
+                "the file ends early: it is truncated or not a LAS file",
+            ),
+            (
+                "truncated_points.las",
+                "the file ends early: it is truncated or not a LAS file",
+            ),
+            ("no_points.las", "holds no point"),
+            (
+                "scale_nan.las",
+                "none of its 16 points has finite coordinates (check the header's scale",
+            ),
+            ("not_las.laz", "the file signature is not 'LASF'"),
+            (
+                "../las/count_too_large.las",
+                "its header points outside the file (point count or offsets too large)",
+            ),
+            (
+                "../las/truncated_points.las",
+                "the header counts 40 points of 30 bytes, more than the file's 682 bytes hold",
+            ),
+            ("../las/record_length_1.las", "record length 1 is too small"),
+            (
+                "../las/unknown_point_format.las",
+                "invalid format number: 77",
+            ),
+        ],
+    );
+}
+
+/// Surveys wrong in their generator, point-cloud or output keys (no file
+/// behind them but the valid `cloud/good.las`).
+#[test]
+fn broken_generator_cloud_and_output_keys() {
+    let cases: [(&str, &[&str]); 14] = [
+        (
+            "fbm/zero_resolution.toml",
+            &[
+                "zero_resolution.toml:12:16",
+                "`terrain[0].resolution_m`: must be greater than 0 m, got 0",
+            ],
+        ),
+        (
+            "fbm/negative_resolution.toml",
+            &[
+                "negative_resolution.toml:12:16",
+                "`terrain[0].resolution_m`: must be greater than 0 m, got -5",
+            ],
+        ),
+        (
+            "fbm/nan_resolution.toml",
+            &["nan_resolution.toml:12:16", "got NaN"],
+        ),
+        (
+            "fbm/inverted_extent.toml",
+            &[
+                "inverted_extent.toml:11:12",
+                "`terrain[0].extent_m`: must be [xmin, ymin, xmax, ymax] in metres with xmax > xmin",
+            ],
+        ),
+        (
+            "fbm/short_extent.toml",
+            &[
+                "short_extent.toml:11:12",
+                "`terrain[0].extent_m`: must be [xmin, ymin, xmax, ymax]",
+            ],
+        ),
+        (
+            "fbm/absurd_resolution.toml",
+            &[
+                "absurd_resolution.toml:12:16",
+                "`terrain[0].resolution_m`",
+                "1000000001 × 1000000001 cells exceed the limit of 100000000 cells",
+            ],
+        ),
+        (
+            "cloud/voxel_zero.toml",
+            &[
+                "voxel_zero.toml:11:11",
+                "`point_cloud[0].voxel_m`: must be greater than 0 and at most 1000 m, got 0",
+            ],
+        ),
+        (
+            "cloud/voxel_huge.toml",
+            &["voxel_huge.toml:11:11", "at most 1000 m, got 1000000000"],
+        ),
+        (
+            "output/unknown_epsg.toml",
+            &[
+                "unknown_epsg.toml:15:7",
+                "`output.crs`: EPSG:999999 is not in the built-in table",
+                "give its WKT with `crs_wkt` instead",
+            ],
+        ),
+        (
+            "output/malformed_crs.toml",
+            &[
+                "malformed_crs.toml:15:7",
+                "`output.crs`: must be \"EPSG:code\", got 'UTM35'",
+            ],
+        ),
+        (
+            "output/malformed_crs_wkt.toml",
+            &[
+                "malformed_crs_wkt.toml:15:11",
+                "`output.crs_wkt`: has unbalanced brackets or quotes",
+            ],
+        ),
+        (
+            "output/crs_twice.toml",
+            &[
+                "crs_twice.toml:16:11",
+                "`output.crs_wkt`: give the CRS once",
+            ],
+        ),
+        (
+            "output/offset_not_finite.toml",
+            &[
+                "offset_not_finite.toml:15:12",
+                "`output.offset_m`: must hold finite numbers",
+            ],
+        ),
+        (
+            "output/unknown_format.toml",
+            &[
+                "unknown_format.toml:15:19",
+                "`output.formats[1]`: unknown format 'las-wavefrom'",
+            ],
+        ),
+    ];
+    let mut seen = Vec::new();
+    for (file, expect) in cases {
+        reject_survey(file, &corpus().join(file), expect, &mut seen);
+    }
+    print(&seen);
+}

@@ -1,8 +1,10 @@
 //! Property-based fuzzing of every input parser, a bounded number of cases
 //! each (deterministic seed, so CI sees the same cases every run): survey
-//! TOML, OBJ meshes (through a survey), trajectory CSV and the LAS header
-//! read when a run is resumed. None may panic; failures must be reported
-//! as errors that name their place. Run with `--nocapture` for the counts.
+//! TOML, OBJ meshes (through a survey), trajectory CSV, the LAS header
+//! read when a run is resumed, ESRI ASCII grids, GeoTIFF bytes, GLB bytes
+//! and LAS point clouds read as scene geometry. None may panic; failures
+//! must be reported as errors that name their place. Run with
+//! `--nocapture` for the counts.
 
 use std::cell::Cell;
 use std::path::{Path, PathBuf};
@@ -365,5 +367,286 @@ fn las_header_of_a_resumed_run_never_panics() {
         "LAS header (resume): {CASES} cases, {} accepted, {} rejected naming the file",
         ok.get(),
         rejected.get()
+    );
+}
+
+/// Applies byte edits (set, insert, remove) and a final length to `bytes`;
+/// half the edits fall in `hot` (the header), where they matter most.
+fn mutate(bytes: &[u8], edits: &[(usize, u8, u8, bool)], hot: usize, len: usize) -> Vec<u8> {
+    let mut b = bytes.to_vec();
+    for &(at, v, op, in_hot) in edits {
+        if b.is_empty() {
+            break;
+        }
+        let at = if in_hot {
+            at % hot.min(b.len())
+        } else {
+            at % b.len()
+        };
+        match op {
+            0 | 1 => b[at] = v,
+            2 => b.insert(at, v),
+            _ => {
+                b.remove(at);
+            }
+        }
+    }
+    b.truncate(len);
+    b
+}
+
+fn edits() -> impl Strategy<Value = Vec<(usize, u8, u8, bool)>> {
+    proptest::collection::vec((any::<usize>(), any::<u8>(), 0u8..4, any::<bool>()), 0..5)
+}
+
+/// Whole length mostly, else cut anywhere.
+fn length(n: usize) -> impl Strategy<Value = usize> {
+    prop_oneof![4 => Just(usize::MAX), 1 => 0..n]
+}
+
+fn corpus_file(rel: &str) -> Vec<u8> {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../lidarsim-cli/tests/corpus")
+        .join(rel);
+    std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+fn data_file(name: &str) -> Vec<u8> {
+    std::fs::read(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data")
+            .join(name),
+    )
+    .unwrap()
+}
+
+/// One ESRI ASCII header line: a known key (or a misspelt one) with an
+/// awkward value, sometimes none.
+fn asc_header_line() -> impl Strategy<Value = String> {
+    let key = prop_oneof![
+        Just("ncols"),
+        Just("nrows"),
+        Just("xllcorner"),
+        Just("yllcenter"),
+        Just("cellsize"),
+        Just("dx"),
+        Just("NODATA_value"),
+        Just("xllcenter"),
+        Just("cellsise"),
+    ];
+    let value = prop_oneof![
+        6 => (0i64..6).prop_map(|v| v.to_string()),
+        2 => plain_number(),
+        1 => number(),
+        1 => Just("1000000000".to_string()),
+        1 => Just(String::new()),
+    ];
+    (key, value).prop_map(|(k, v)| format!("{k} {v}"))
+}
+
+#[test]
+fn esri_ascii_grids_never_panic_and_errors_name_the_file() {
+    let dir = temp("asc");
+    let path = dir.join("g.asc");
+    let valid = "ncols 3\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 2\nNODATA_value -9999\n";
+    let mut runner = runner(CASES);
+    let (ok, rejected) = (Cell::new(0u32), Cell::new(0u32));
+    let text = (
+        prop_oneof![
+            3 => Just(valid.to_string()),
+            2 => proptest::collection::vec(asc_header_line(), 0..8)
+                .prop_map(|l| l.join("\n") + "\n"),
+        ],
+        prop_oneof![
+            3 => proptest::collection::vec(plain_number(), 9),
+            1 => proptest::collection::vec(plain_number(), 0..14),
+        ],
+        proptest::collection::vec((0..400usize, any::<u8>()), 0..2),
+    );
+    runner
+        .run(&text, |(header, values, bytes)| {
+            let mut b = format!("{header}{}\n", values.join(" ")).into_bytes();
+            for (at, v) in bytes {
+                let at = at % b.len();
+                b[at] = v;
+            }
+            std::fs::write(&path, &b).unwrap();
+            match lidarsim::scene::terrain::read_raster(&path) {
+                Ok(g) => {
+                    ok.set(ok.get() + 1);
+                    let (c, r) = (g.cols, g.rows);
+                    prop_assert!(c >= 2 && r >= 2 && g.heights.len() == c * r);
+                }
+                Err(e) => {
+                    rejected.set(rejected.get() + 1);
+                    prop_assert!(e.to_string().contains("g.asc"), "{e}");
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    println!(
+        "ESRI ASCII: {CASES} cases, {} accepted, {} rejected naming the file",
+        ok.get(),
+        rejected.get()
+    );
+}
+
+#[test]
+fn geotiff_bytes_never_panic_and_errors_name_the_file() {
+    // GDAL's DEFLATE-compressed tiled rasters (rasterio fixtures) and the
+    // corpus' uncompressed strip.
+    let sources = [
+        data_file("dem_area.tif"),
+        data_file("dem_point.tif"),
+        corpus_file("geotiff/good.tif"),
+    ];
+    let dir = temp("tif");
+    let path = dir.join("dem.tif");
+    let mut runner = runner(CASES);
+    let (ok, rejected) = (Cell::new(0u32), Cell::new(0u32));
+    runner
+        .run(&(0..sources.len(), edits(), length(2000)), |(k, e, len)| {
+            let b = mutate(&sources[k], &e, 600, len);
+            std::fs::write(&path, &b).unwrap();
+            match lidarsim::scene::terrain::read_raster(&path) {
+                Ok(g) => {
+                    ok.set(ok.get() + 1);
+                    prop_assert!(g.heights.len() == g.cols * g.rows);
+                    prop_assert!(g.heights.iter().any(|h| h.is_finite()));
+                }
+                Err(e) => {
+                    rejected.set(rejected.get() + 1);
+                    prop_assert!(e.to_string().contains("dem.tif"), "{e}");
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    println!(
+        "GeoTIFF: {CASES} cases, {} accepted, {} rejected naming the file",
+        ok.get(),
+        rejected.get()
+    );
+}
+
+/// A small survey whose only scene entry names `entry` (a `[[mesh]]` or
+/// `[[point_cloud]]` table).
+fn scene_survey(entry: &str) -> String {
+    format!(
+        "[[flight_line]]\nstart_m = [0.0, -50.0, 300.0]\nend_m = [0.0, 50.0, 300.0]\n\
+         speed_mps = 50.0\n[materials.grass]\nreflectance = 0.4\n{entry}"
+    )
+}
+
+#[test]
+fn glb_bytes_never_panic_and_errors_name_the_file() {
+    let glb = corpus_file("gltf/good.glb");
+    // The JSON chunk: its numbers (counts, offsets, lengths, indices) are
+    // what a digit edit changes.
+    let json_len = u32::from_le_bytes([glb[12], glb[13], glb[14], glb[15]]) as usize;
+    let dir = temp("glb");
+    let path = dir.join("m.glb");
+    let survey = scene_survey(&format!(
+        "[[mesh]]\nfile = \"{}\"\nmaterial = \"grass\"\n",
+        path.display()
+    ));
+    let digit_edits = proptest::collection::vec((0..json_len, 0u32..10, 0u32..1000), 0..4);
+    let mut runner = runner(CASES);
+    let (ok, rejected) = (Cell::new(0u32), Cell::new(0u32));
+    runner
+        .run(
+            &(digit_edits, edits(), length(glb.len())),
+            |(digits, e, len)| {
+                // Replace a digit of the JSON by a number (same length is not
+                // kept: the chunk length then disagrees, another error).
+                let mut b = glb.clone();
+                for (at, d, n) in digits {
+                    let at = 20 + at;
+                    if b[at].is_ascii_digit() {
+                        if n < 500 {
+                            b[at] = b'0' + d as u8;
+                        } else {
+                            let s = (n * 977 + d).to_string();
+                            b.splice(at..=at, s.bytes());
+                        }
+                    }
+                }
+                let b = mutate(&b, &e, 20 + json_len, len);
+                std::fs::write(&path, &b).unwrap();
+                match Survey::from_toml(&survey, None) {
+                    Ok(_) => ok.set(ok.get() + 1),
+                    Err(e) => {
+                        rejected.set(rejected.get() + 1);
+                        let d = e.diagnostics.iter().find(|d| d.key == "mesh[0].file");
+                        prop_assert!(d.is_some(), "{e}");
+                        prop_assert!(d.unwrap().message.contains("m.glb"), "{e}");
+                    }
+                }
+                Ok(())
+            },
+        )
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    println!(
+        "GLB: {CASES} cases, {} accepted, {} rejected naming the file",
+        ok.get(),
+        rejected.get()
+    );
+}
+
+#[test]
+fn las_point_cloud_bytes_never_panic_and_errors_name_the_file() {
+    let las = corpus_file("cloud/good.las");
+    let dir = temp("cloud");
+    let path = dir.join("c.las");
+    let survey = scene_survey(&format!(
+        "[[point_cloud]]\nfile = \"{}\"\nmaterial = \"grass\"\nvoxel_m = 0.5\n",
+        path.display()
+    ));
+    let mut runner = runner(CASES);
+    let (ok, rejected, far_off) = (Cell::new(0u32), Cell::new(0u32), Cell::new(0u32));
+    runner
+        .run(&(edits(), length(las.len())), |(e, len)| {
+            // The header is the first 227 bytes.
+            let b = mutate(&las, &e, 227, len);
+            std::fs::write(&path, &b).unwrap();
+            match Survey::from_toml(&survey, None) {
+                Ok(_) => ok.set(ok.get() + 1),
+                Err(e) => {
+                    rejected.set(rejected.get() + 1);
+                    let d = e
+                        .diagnostics
+                        .iter()
+                        .find(|d| d.key == "point_cloud[0].file");
+                    // A cloud that reads but lies absurdly far (a mutated
+                    // scale or offset) is refused by the scene-wide extent
+                    // check; anything else names the file.
+                    let far = e
+                        .diagnostics
+                        .iter()
+                        .any(|d| d.message.contains("coordinates must lie within ±1e8 m"));
+                    prop_assert!(d.is_some() || far, "{e}");
+                    if d.is_none() {
+                        far_off.set(far_off.get() + 1);
+                    }
+                    if let Some(d) = d {
+                        prop_assert!(d.message.contains("c.las"), "{e}");
+                    }
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+    std::fs::remove_dir_all(&dir).ok();
+    println!(
+        "LAS point cloud: {CASES} cases, {} accepted, {} rejected ({} naming the file, {} by \
+         the scene's ±1e8 m extent check)",
+        ok.get(),
+        rejected.get(),
+        rejected.get() - far_off.get(),
+        far_off.get()
     );
 }

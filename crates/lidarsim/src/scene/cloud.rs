@@ -140,9 +140,49 @@ pub fn load_point_cloud(
 ) -> Result<(u64, usize), CloudError> {
     let bad = |e: las::Error| CloudError::Read {
         path: path.to_path_buf(),
-        reason: e.to_string(),
+        reason: match &e {
+            las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+                "the file ends early: it is truncated or not a LAS file".to_string()
+            }
+            las::Error::Io(io) if io.kind() == std::io::ErrorKind::InvalidInput => {
+                "its header points outside the file (point count or offsets too large)".to_string()
+            }
+            _ => e.to_string(),
+        },
     };
+    let size = std::fs::metadata(path)
+        .map_err(|e| CloudError::Read {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?
+        .len();
     let mut reader = las::Reader::from_path(path).map_err(bad)?;
+    // The header's point count against the file's size, before reading:
+    // a LAS point takes its record length. (LAZ can pack a smooth cloud
+    // into less than a byte per point: not checked, its reader stops at
+    // the end of the data.)
+    let header = reader.header();
+    let count = header.number_of_points();
+    let record = u64::from(header.point_format().len());
+    let compressed = header.point_format().is_compressed
+        || header.vlrs().iter().any(|v| v.user_id == "laszip encoded")
+        || path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
+    match count.checked_mul(record) {
+        Some(bytes) if bytes <= size || compressed => {}
+        _ => {
+            return Err(CloudError::Read {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "the header counts {count} points of {record} bytes, more than the \
+                     file's {size} bytes hold: it is truncated or its header is wrong"
+                ),
+            });
+        }
+    }
+    let mut not_finite = 0u64;
     let v = placement.voxel_m;
     // (voxel index, classification) of every point, then sorted and
     // grouped: no hash map of counters.
@@ -158,6 +198,7 @@ pub fn load_point_cloud(
             read += 1;
             let q = DVec3::new(p.x, p.y, p.z) + placement.offset_m;
             if !q.is_finite() {
+                not_finite += 1;
                 continue;
             }
             let key = [
@@ -167,6 +208,15 @@ pub fn load_point_cloud(
             ];
             cells.push((key, u8::from(p.classification)));
         }
+    }
+    if cells.is_empty() && not_finite > 0 {
+        return Err(CloudError::Read {
+            path: path.to_path_buf(),
+            reason: format!(
+                "none of its {not_finite} points has finite coordinates (check the header's \
+                 scale and offset)"
+            ),
+        });
     }
     if cells.is_empty() {
         return Err(CloudError::Empty {

@@ -45,13 +45,29 @@ pub fn load_gltf(
         path: path.to_path_buf(),
         reason,
     };
-    let gltf::Gltf { document, blob } = gltf::Gltf::open(path).map_err(|e| match e {
-        gltf::Error::Io(source) => MeshError::Read {
-            path: path.to_path_buf(),
-            source,
-        },
+    let bytes = std::fs::read(path).map_err(|source| MeshError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let is_glb = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    if bytes.is_empty() {
+        return Err(fail("is empty".to_string()));
+    }
+    if is_glb && !bytes.starts_with(b"glTF") {
+        return Err(fail(
+            "is not a binary glTF (GLB): it does not start with the magic 'glTF'".to_string(),
+        ));
+    }
+    let gltf::Gltf { document, blob } = gltf::Gltf::from_slice(&bytes).map_err(|e| match e {
+        gltf::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            fail("the file ends early: it is truncated".to_string())
+        }
         other => fail(format!("not a valid glTF 2.0 file: {other}")),
     })?;
+    drop(bytes);
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
         .map_err(|e| fail(format!("cannot load its buffers: {e}")))?;
     let Some(root) = document
@@ -169,9 +185,49 @@ pub fn load_gltf(
                 .or_else(|| mat.name().and_then(class_from_name))
                 .or_else(|| names.iter().find_map(|n| class_from_name(n)))
                 .unwrap_or(placement.default_class);
+            let Some(pos_accessor) = prim.get(&gltf::Semantic::Positions) else {
+                return Err(fail(format!("{} has no POSITION attribute", what())));
+            };
+            {
+                use gltf::accessor::{DataType, Dimensions};
+                if pos_accessor.data_type() != DataType::F32
+                    || pos_accessor.dimensions() != Dimensions::Vec3
+                {
+                    return Err(fail(format!(
+                        "{}: POSITION (accessor {}) must be float VEC3, got {:?} {:?}",
+                        what(),
+                        pos_accessor.index(),
+                        pos_accessor.data_type(),
+                        pos_accessor.dimensions()
+                    )));
+                }
+                check_accessor(&pos_accessor, &buffers)
+                    .map_err(|r| fail(format!("{}: {r}", what())))?;
+                if let Some(idx) = prim.indices() {
+                    if !matches!(
+                        idx.data_type(),
+                        DataType::U8 | DataType::U16 | DataType::U32
+                    ) || idx.dimensions() != Dimensions::Scalar
+                    {
+                        return Err(fail(format!(
+                            "{}: the indices (accessor {}) must be unsigned SCALAR integers, got \
+                             {:?} {:?}",
+                            what(),
+                            idx.index(),
+                            idx.data_type(),
+                            idx.dimensions()
+                        )));
+                    }
+                    check_accessor(&idx, &buffers).map_err(|r| fail(format!("{}: {r}", what())))?;
+                }
+            }
             let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
             let Some(positions) = reader.read_positions() else {
-                return Err(fail(format!("{} has no POSITION attribute", what())));
+                return Err(fail(format!(
+                    "{}: POSITION (accessor {}) has no data",
+                    what(),
+                    pos_accessor.index()
+                )));
             };
             let positions: Vec<DVec3> = positions
                 .map(|p| {
@@ -235,4 +291,96 @@ pub fn load_gltf(
         });
     }
     Ok((added, skipped))
+}
+
+/// Checks that an accessor's elements lie inside its buffer view and the
+/// view inside its buffer, with checked arithmetic: the `gltf` crate's
+/// readers index the buffers unchecked (and overflow on counts of 0 or
+/// near 2⁶⁴), so a corrupt file must be refused before they run.
+fn check_accessor(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<(), String> {
+    let i = acc.index();
+    let size = acc.size();
+    // One element's bytes at `offset` of `view`, `count` times `stride` apart.
+    let range = |what: &str,
+                 view: &gltf::buffer::View,
+                 offset: usize,
+                 count: usize,
+                 size: usize|
+     -> Result<(), String> {
+        if count == 0 {
+            return Err(format!("{what} counts no element"));
+        }
+        let stride = view.stride().unwrap_or(size);
+        if stride < size {
+            return Err(format!(
+                "{what}: byte stride {stride} is shorter than an element ({size} bytes)"
+            ));
+        }
+        let end = (count - 1)
+            .checked_mul(stride)
+            .and_then(|b| b.checked_add(size))
+            .and_then(|b| b.checked_add(offset));
+        match end {
+            Some(end) if end <= view.length() => {}
+            _ => {
+                return Err(format!(
+                    "{what} counts {count} elements of {size} bytes, past the end of buffer \
+                     view {} ({} bytes)",
+                    view.index(),
+                    view.length()
+                ));
+            }
+        }
+        let buffer_len = buffers.get(view.buffer().index()).map_or(0, |d| d.0.len());
+        match view.offset().checked_add(view.length()) {
+            Some(end) if end <= buffer_len => Ok(()),
+            _ => Err(format!(
+                "buffer view {} (bytes {}..+{}) lies past the end of buffer {} ({buffer_len} \
+                 bytes)",
+                view.index(),
+                view.offset(),
+                view.length(),
+                view.buffer().index()
+            )),
+        }
+    };
+    match acc.view() {
+        Some(view) => range(
+            &format!("accessor {i}"),
+            &view,
+            acc.offset(),
+            acc.count(),
+            size,
+        )?,
+        None if acc.sparse().is_none() => {
+            return Err(format!("accessor {i} has no buffer view"));
+        }
+        None => {}
+    }
+    if let Some(sparse) = acc.sparse() {
+        let n = sparse.count();
+        if n > acc.count() {
+            return Err(format!(
+                "accessor {i}: {n} sparse elements for {} elements",
+                acc.count()
+            ));
+        }
+        let idx = sparse.indices();
+        range(
+            &format!("accessor {i} sparse indices"),
+            &idx.view(),
+            idx.offset(),
+            n,
+            idx.index_type().size(),
+        )?;
+        let values = sparse.values();
+        range(
+            &format!("accessor {i} sparse values"),
+            &values.view(),
+            values.offset(),
+            n,
+            size,
+        )?;
+    }
+    Ok(())
 }

@@ -26,8 +26,8 @@ use crate::geometry::{DMat3, DVec3};
 /// Why a mesh could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum MeshError {
-    /// The OBJ file could not be read.
-    #[error("cannot read OBJ file '{path}': {source}")]
+    /// The mesh file (OBJ or glTF) could not be read.
+    #[error("cannot read mesh file '{path}': {source}")]
     Read {
         /// File that failed.
         path: PathBuf,

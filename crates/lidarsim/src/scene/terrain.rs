@@ -483,14 +483,22 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
         reason,
     };
     // Streamed line by line: a 4000 × 4000 grid is ~350 MB of text.
-    let mut lines = BufReader::new(file)
-        .lines()
-        .enumerate()
-        .map(|(n, l)| l.map(|l| (n, l)));
+    let mut lines = BufReader::new(file).split(b'\n').enumerate().map(|(n, l)| {
+        let l = l.map_err(read_err)?;
+        String::from_utf8(l).map(|l| (n, l)).map_err(|e| {
+            err(
+                n + 1,
+                format!(
+                    "not valid UTF-8 (byte {})",
+                    e.utf8_error().valid_up_to() + 1
+                ),
+            )
+        })
+    });
     let mut header: Vec<(String, f64, usize)> = Vec::new();
     let mut first_data: Option<(usize, String)> = None;
     for item in lines.by_ref() {
-        let (n, line) = item.map_err(read_err)?;
+        let (n, line) = item?;
         let mut words = line.split_whitespace();
         let Some(key) = words.next() else {
             continue;
@@ -612,7 +620,7 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
     let mut k = 0usize;
     let mut last_line = 0;
     for item in first_data.map(Ok).into_iter().chain(lines) {
-        let (n, line) = item.map_err(read_err)?;
+        let (n, line) = item?;
         for word in line.split_whitespace() {
             if k >= total {
                 return Err(err(
@@ -673,10 +681,29 @@ pub fn read_geotiff(path: &Path) -> Result<HeightGrid, TerrainError> {
         line: 0,
         reason,
     };
-    let tiff_err = |e: tiff::TiffError| err(format!("not a readable TIFF: {e}"));
+    let file_len = file.metadata().map(|m| m.len()).unwrap_or(u64::MAX);
+    let tiff_err = |e: tiff::TiffError| match e {
+        tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            err("the file ends early: it is truncated or not a TIFF".to_string())
+        }
+        tiff::TiffError::LimitsExceeded => err(
+            "a tag declares more values than a GeoTIFF DEM can hold (the header is corrupt)"
+                .to_string(),
+        ),
+        e => err(format!("not a readable TIFF: {e}")),
+    };
+    // Bounded, so that sizes declared in a corrupt header fail as errors
+    // instead of allocations: the image itself up to MAX_NODES 64-bit
+    // samples, tag values (tie points, strip offsets) up to 16 MiB.
     let mut dec = Decoder::new(BufReader::new(file))
         .map_err(tiff_err)?
-        .with_limits(Limits::unlimited());
+        .with_limits({
+            let mut l = Limits::default();
+            l.decoding_buffer_size = MAX_NODES * 8;
+            l.intermediate_buffer_size = MAX_NODES * 8;
+            l.ifd_value_size = 16 << 20;
+            l
+        });
     let (width, height) = dec.dimensions().map_err(tiff_err)?;
     let (width, height) = (width as usize, height as usize);
     let samples = dec
@@ -795,9 +822,34 @@ pub fn read_geotiff(path: &Path) -> Result<HeightGrid, TerrainError> {
             reason: format!("{width} × {height} cells exceed the limit of {MAX_NODES} cells"),
         });
     }
-    let image = dec
-        .read_image()
-        .map_err(|e| err(format!("cannot decode the image: {e}")))?;
+    // Uncompressed samples take their full size in the file: a header
+    // declaring more is corrupt (caught before allocating the image).
+    let compression = dec
+        .find_tag_unsigned::<u16>(Tag::Compression)
+        .map_err(tiff_err)?
+        .unwrap_or(1);
+    let bits = dec
+        .find_tag_unsigned_vec::<u16>(Tag::BitsPerSample)
+        .map_err(tiff_err)?
+        .and_then(|b| b.first().copied())
+        .unwrap_or(1);
+    let need = (width as u64)
+        .saturating_mul(height as u64)
+        .saturating_mul(u64::from(bits))
+        / 8;
+    if compression == 1 && need > file_len {
+        return Err(err(format!(
+            "the header declares {width} × {height} uncompressed pixels of {bits} bits \
+             ({need} bytes), more than the file's {file_len} bytes: it is truncated or its \
+             header is wrong"
+        )));
+    }
+    let image = dec.read_image().map_err(|e| match e {
+        tiff::TiffError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            err("cannot decode the image: the file ends early (truncated?)".to_string())
+        }
+        e => err(format!("cannot decode the image: {e}")),
+    })?;
     let value = |k: usize| -> f64 {
         match &image {
             DecodingResult::U8(v) => v[k] as f64,
