@@ -577,44 +577,9 @@ fn render(
 /// more points than the file holds) before any large allocation.
 fn read_cloud(cloud: &Path) -> Result<Vec<lidarsim::render::RenderPoint>, String> {
     use lidarsim::render::RenderPoint;
-    let bad = |e: las::Error| {
-        let why = match &e {
-            las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
-                "the file ends early: it is truncated or not a LAS file".to_string()
-            }
-            las::Error::Io(io) if io.kind() == std::io::ErrorKind::InvalidInput => {
-                "its header points outside the file (point count or offsets too large)".to_string()
-            }
-            _ => e.to_string(),
-        };
-        format!("{}: {why}", cloud.display())
-    };
-    let size = std::fs::metadata(cloud)
-        .map_err(|e| format!("{}: {e}", cloud.display()))?
-        .len();
-    let mut reader = las::Reader::from_path(cloud).map_err(bad)?;
-    let header = reader.header();
-    let count = header.number_of_points();
-    let record = u64::from(header.point_format().len());
-    // Compressed (LAZ) points take less room than their records — a smooth
-    // cloud less than a byte each: not checked, the LAZ reader stops at the
-    // end of its data.
-    let compressed = header.point_format().is_compressed
-        || header.vlrs().iter().any(|v| v.user_id == "laszip encoded")
-        || cloud
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
-    match count.checked_mul(record) {
-        Some(bytes) if bytes <= size || compressed => {}
-        _ => {
-            return Err(format!(
-                "{}: the header counts {count} points of {record} bytes, more than the file's \
-                 {size} bytes hold: it is truncated or its header is wrong",
-                cloud.display()
-            ));
-        }
-    }
+    use lidarsim::scene::cloud::{describe_las_error, open_las};
+    let bad = |e: las::Error| format!("{}: {}", cloud.display(), describe_las_error(&e));
+    let mut reader = open_las(cloud).map_err(|why| format!("{}: {why}", cloud.display()))?;
     reader
         .read_all()
         .map_err(bad)?

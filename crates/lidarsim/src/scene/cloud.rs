@@ -131,36 +131,29 @@ pub struct CloudPlacement {
     pub class: Option<SurfaceClass>,
 }
 
-/// Loads a LAS or LAZ file into `scene` as voxels of one new object;
-/// returns (points read, voxels added).
-pub fn load_point_cloud(
-    path: &Path,
-    placement: &CloudPlacement,
-    scene: &mut Scene,
-) -> Result<(u64, usize), CloudError> {
-    let bad = |e: las::Error| CloudError::Read {
-        path: path.to_path_buf(),
-        reason: match &e {
-            las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
-                "the file ends early: it is truncated or not a LAS file".to_string()
-            }
-            las::Error::Io(io) if io.kind() == std::io::ErrorKind::InvalidInput => {
-                "its header points outside the file (point count or offsets too large)".to_string()
-            }
-            _ => e.to_string(),
-        },
-    };
-    let size = std::fs::metadata(path)
-        .map_err(|e| CloudError::Read {
-            path: path.to_path_buf(),
-            reason: e.to_string(),
-        })?
-        .len();
-    let mut reader = las::Reader::from_path(path).map_err(bad)?;
-    // The header's point count against the file's size, before reading:
-    // a LAS point takes its record length. (LAZ can pack a smooth cloud
-    // into less than a byte per point: not checked, its reader stops at
-    // the end of the data.)
+/// A LAS reader error in words: a truncated file, a header pointing
+/// outside the file, or the reader's own message.
+pub fn describe_las_error(e: &las::Error) -> String {
+    match e {
+        las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "the file ends early: it is truncated or not a LAS file".to_string()
+        }
+        las::Error::Io(io) if io.kind() == std::io::ErrorKind::InvalidInput => {
+            "its header points outside the file (point count or offsets too large)".to_string()
+        }
+        _ => e.to_string(),
+    }
+}
+
+/// Opens a LAS or LAZ file for reading, after checking the header's point
+/// count against the file's size (a LAS point takes its record length; LAZ
+/// can pack a smooth cloud into less than a byte per point, so it is not
+/// checked and its reader stops at the end of the data): a header that
+/// promises more points than the file holds is refused before any large
+/// allocation. Errors say what is wrong, without the path.
+pub fn open_las(path: &Path) -> Result<las::Reader, String> {
+    let size = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
+    let reader = las::Reader::from_path(path).map_err(|e| describe_las_error(&e))?;
     let header = reader.header();
     let count = header.number_of_points();
     let record = u64::from(header.point_format().len());
@@ -171,17 +164,29 @@ pub fn load_point_cloud(
             .and_then(|e| e.to_str())
             .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
     match count.checked_mul(record) {
-        Some(bytes) if bytes <= size || compressed => {}
-        _ => {
-            return Err(CloudError::Read {
-                path: path.to_path_buf(),
-                reason: format!(
-                    "the header counts {count} points of {record} bytes, more than the \
-                     file's {size} bytes hold: it is truncated or its header is wrong"
-                ),
-            });
-        }
+        Some(bytes) if bytes <= size || compressed => Ok(reader),
+        _ => Err(format!(
+            "the header counts {count} points of {record} bytes, more than the file's {size} \
+             bytes hold: it is truncated or its header is wrong"
+        )),
     }
+}
+
+/// Loads a LAS or LAZ file into `scene` as voxels of one new object;
+/// returns (points read, voxels added).
+pub fn load_point_cloud(
+    path: &Path,
+    placement: &CloudPlacement,
+    scene: &mut Scene,
+) -> Result<(u64, usize), CloudError> {
+    let bad = |e: las::Error| CloudError::Read {
+        path: path.to_path_buf(),
+        reason: describe_las_error(&e),
+    };
+    let mut reader = open_las(path).map_err(|reason| CloudError::Read {
+        path: path.to_path_buf(),
+        reason,
+    })?;
     let mut not_finite = 0u64;
     let v = placement.voxel_m;
     // (voxel index, classification) of every point, then sorted and
