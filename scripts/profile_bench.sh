@@ -2,13 +2,14 @@
 # Instruction counts per pulse of the benchmark scenes under callgrind
 # (stable on a shared machine, unlike wall-clock rates): only the work
 # inside the simulation of pulse blocks is counted, not scene loading.
-# Usage: scripts/profile_bench.sh [PULSES] (default 20000); needs valgrind.
+# Usage: [BIN=path/to/lidarsim] [SCENES="flat terrain"] scripts/profile_bench.sh [PULSES]
+# (default 20000); needs valgrind.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 pulses=${1:-20000}
-bin=target/release/lidarsim
-[ -x "$bin" ] || cargo build --release -q
-for scene in flat terrain; do
+bin=${BIN:-target/release/lidarsim}
+[ -n "${BIN:-}" ] || [ -x "$bin" ] || cargo build --release -q
+for scene in ${SCENES:-flat terrain}; do
     out=$(mktemp)
     valgrind --tool=callgrind --callgrind-out-file="$out" \
         --toggle-collect='*simulate_block*' \

@@ -11,7 +11,7 @@ use super::{
     Hit, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, oriented_hit, volume_span,
 };
 use crate::geometry::{Aabb, DVec3, Ray};
-use crate::scene::{Primitive, Scene, Shape, Triangle, TriangleFan};
+use crate::scene::{Coverage, Primitive, Scene, Shape, Triangle, TriangleFan, bundle_spread};
 
 const MAX_LEAF: usize = 4;
 const BINS: usize = 16;
@@ -559,6 +559,7 @@ impl RayCaster for Bvh {
             return;
         }
         let bundle = Bundle::new(origin - self.origin, dirs);
+        let cone = bundle_spread(dirs);
         let mut best = std::mem::take(&mut out.best);
         let mut volumes = std::mem::take(&mut out.volumes);
         best.clear();
@@ -584,7 +585,7 @@ impl RayCaster for Bvh {
                         continue;
                     }
                     if let Shape::Triangle(tri) = &prim.shape {
-                        missing -= bundle_triangle(tri, p, origin, dirs, t_min, &mut best);
+                        missing -= bundle_triangle(tri, p, origin, dirs, cone, t_min, &mut best);
                         continue;
                     }
                     for (dir, b) in dirs.iter().zip(best.iter_mut()) {
@@ -680,20 +681,33 @@ impl RayCaster for Bvh {
 /// Tests all rays of a bundle from `origin` against one triangle (the
 /// arithmetic of [`Triangle::intersect`], its per-origin part done once),
 /// updating `best` (distance, primitive) where the triangle is closer;
-/// returns how many rays got their first hit.
+/// returns how many rays got their first hit. `cone` is the bundle's axis
+/// and spread ([`bundle_spread`]): a triangle the whole bundle misses costs
+/// only its edge planes, and one it covers skips the per-ray edge tests.
 #[inline]
 fn bundle_triangle(
     tri: &Triangle,
     p: u32,
     origin: DVec3,
     dirs: &[DVec3],
+    cone: (DVec3, f64),
     t_min: f64,
     best: &mut [(f64, u32)],
 ) -> usize {
-    let fan = TriangleFan::new(tri, origin);
+    let mut fan = TriangleFan::edges(tri, origin);
+    let coverage = fan.coverage(cone.0, cone.1);
+    if coverage == Coverage::None {
+        return 0;
+    }
+    fan.complete(tri);
     let mut first = 0;
     for (d, slot) in dirs.iter().zip(best.iter_mut()) {
-        if let Some(t) = fan.intersect(*d, t_min, slot.0) {
+        let t = if coverage == Coverage::All {
+            fan.distance(*d, t_min, slot.0)
+        } else {
+            fan.intersect(*d, t_min, slot.0)
+        };
+        if let Some(t) = t {
             first += usize::from(slot.1 == u32::MAX);
             *slot = (t, p);
         }

@@ -197,24 +197,85 @@ pub struct TriangleFan {
     nab: DVec3,
     nbc: DVec3,
     nca: DVec3,
+    /// First corner relative to the origin.
+    a: DVec3,
     n: DVec3,
     num: f64,
+}
+
+/// Which rays of a bundle can meet a triangle ([`TriangleFan::coverage`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Coverage {
+    /// None of them.
+    None,
+    /// All of them pass the edge tests; only the distance remains to check.
+    All,
+    /// Undecided: test them one by one.
+    Some,
 }
 
 impl TriangleFan {
     /// Prepares `tri` for rays starting at `origin`.
     #[inline]
     pub fn new(tri: &Triangle, origin: DVec3) -> Self {
+        let mut fan = Self::edges(tri, origin);
+        fan.complete(tri);
+        fan
+    }
+
+    /// The edge planes only: enough for [`TriangleFan::coverage`];
+    /// [`TriangleFan::complete`] must follow before any intersection.
+    #[inline]
+    pub fn edges(tri: &Triangle, origin: DVec3) -> Self {
         let a = tri.v[0] - origin;
         let b = tri.v[1] - origin;
         let c = tri.v[2] - origin;
-        let n = tri.normal();
         Self {
             nab: a.cross(b),
             nbc: b.cross(c),
             nca: c.cross(a),
-            n,
-            num: n.dot(a),
+            a,
+            n: DVec3::ZERO,
+            num: 0.0,
+        }
+    }
+
+    /// Adds the plane of `tri` (the one given to [`TriangleFan::edges`]).
+    #[inline]
+    pub fn complete(&mut self, tri: &Triangle) {
+        self.n = tri.normal();
+        self.num = self.n.dot(self.a);
+    }
+
+    /// Classifies a bundle of directions `d` that all lie within
+    /// `|d − axis| ≤ spread` against the three edge planes. A ray meets the
+    /// triangle only if its three triple products `d·(a×b)`, `d·(b×c)`,
+    /// `d·(c×a)` share their sign; over the bundle each lies within
+    /// `spread·|a×b|` of `axis·(a×b)` (Cauchy–Schwarz), so an edge whose
+    /// product at the axis is farther than that from zero has one sign for
+    /// every ray. Two edges certain of opposite signs exclude every ray; three
+    /// certain of one sign admit every ray. `spread` must include a margin
+    /// for rounding (see [`bundle_spread`]).
+    #[inline]
+    pub fn coverage(&self, axis: DVec3, spread: f64) -> Coverage {
+        let s2 = spread * spread;
+        let (mut pos, mut neg) = (0, 0);
+        for e in [self.nab, self.nbc, self.nca] {
+            let w = axis.dot(e);
+            if w * w > s2 * e.length_squared() {
+                if w > 0.0 {
+                    pos += 1;
+                } else {
+                    neg += 1;
+                }
+            }
+        }
+        if pos > 0 && neg > 0 {
+            Coverage::None
+        } else if pos == 3 || neg == 3 {
+            Coverage::All
+        } else {
+            Coverage::Some
         }
     }
 
@@ -227,9 +288,31 @@ impl TriangleFan {
         if !inside {
             return None;
         }
+        self.distance(d, t_min, t_max)
+    }
+
+    /// [`TriangleFan::intersect`] for a direction known to pass the edge
+    /// tests ([`Coverage::All`]): the same distance, to the bit.
+    #[inline]
+    pub fn distance(&self, d: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
         let t = self.num / self.n.dot(d);
         (t > t_min && t < t_max).then_some(t)
     }
+}
+
+/// Axis and spread of a bundle of unit directions for
+/// [`TriangleFan::coverage`]: their mean, and the largest distance of any of
+/// them from it, widened by a margin (1e-9, six orders of magnitude above the
+/// rounding of the triple products of unit vectors) so that the
+/// classification is never wrong.
+pub fn bundle_spread(dirs: &[DVec3]) -> (DVec3, f64) {
+    let axis = dirs.iter().fold(DVec3::ZERO, |s, d| s + *d) / dirs.len().max(1) as f64;
+    let spread = dirs
+        .iter()
+        .map(|d| (*d - axis).length_squared())
+        .fold(0.0f64, f64::max)
+        .sqrt();
+    (axis, spread * (1.0 + 1e-9) + 1e-9)
 }
 
 /// The geometric shape of a primitive: a closed set, so an enum.
@@ -460,5 +543,78 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The bundle classification never contradicts the ray-by-ray test:
+    /// `None` only when no ray meets the triangle, `All` only when every
+    /// ray passes the edge tests (so that [`TriangleFan::distance`] is
+    /// exact). Bundles of 19 directions within a cone, from nearly parallel
+    /// to wide, against triangles of all sizes and distances; every outcome
+    /// occurs.
+    #[test]
+    fn bundle_coverage_agrees_with_each_ray() {
+        let mut rng = crate::rng::Stream::new(3, 0, 0, crate::rng::Purpose::Test);
+        let mut seen = [0usize; 3];
+        for case in 0..20_000 {
+            let mut u = || rng.uniform() - 0.5;
+            let scale = [0.1, 1.0, 30.0][(case / 2) % 3];
+            let centre = DVec3::new(u() * 40.0, u() * 40.0, u() * 10.0);
+            let Some(tri) = Triangle::new(
+                centre + DVec3::new(u(), u(), u()) * scale,
+                centre + DVec3::new(u(), u(), u()) * scale,
+                centre + DVec3::new(u(), u(), u()) * scale,
+            ) else {
+                continue;
+            };
+            let origin = DVec3::new(u() * 60.0, u() * 60.0, 300.0 + u() * 100.0);
+            // Aimed at a point of the triangle, or near it.
+            let [p, q, r] = tri.vertices();
+            let (f, g) = (u() + 0.5, u() + 0.5);
+            let target = if case % 2 == 0 {
+                let (f, g) = if f + g > 1.0 {
+                    (1.0 - f, 1.0 - g)
+                } else {
+                    (f, g)
+                };
+                p + (q - p) * f + (r - p) * g
+            } else {
+                centre + DVec3::new(u(), u(), 0.0) * 2.0 * scale
+            };
+            let axis = (target - origin).normalize();
+            let spread = [1e-6, 3e-4, 1e-2][(case / 6) % 3];
+            let (a, b) = (
+                axis.any_orthonormal_vector(),
+                axis.cross(axis.any_orthonormal_vector()),
+            );
+            let dirs: Vec<DVec3> = (0..19)
+                .map(|i| {
+                    let r = spread * (i as f64 / 18.0).sqrt();
+                    let ang = i as f64 * 2.4;
+                    (axis + a * (r * ang.cos()) + b * (r * ang.sin())).normalize()
+                })
+                .collect();
+            let (cone_axis, cone_spread) = bundle_spread(&dirs);
+            let fan = TriangleFan::new(&tri, origin);
+            let edges = |d: DVec3| [d.dot(fan.nab), d.dot(fan.nbc), d.dot(fan.nca)];
+            let passes = |d: DVec3| {
+                let w = edges(d);
+                w.iter().all(|&x| x >= 0.0) || w.iter().all(|&x| x <= 0.0)
+            };
+            match fan.coverage(cone_axis, cone_spread) {
+                Coverage::None => {
+                    seen[0] += 1;
+                    assert!(dirs.iter().all(|d| !passes(*d)), "case {case}");
+                }
+                Coverage::All => {
+                    seen[1] += 1;
+                    assert!(dirs.iter().all(|d| passes(*d)), "case {case}");
+                    for d in &dirs {
+                        assert_eq!(fan.distance(*d, 0.0, 1e9), fan.intersect(*d, 0.0, 1e9));
+                    }
+                }
+                Coverage::Some => seen[2] += 1,
+            }
+        }
+        assert!(seen.iter().all(|&n| n > 500), "{seen:?}");
     }
 }
