@@ -134,8 +134,14 @@ impl Detector {
         out.clear();
         signal.clear();
         peaks.clear();
-        signal.extend(wf.samples.iter().zip(&wf.background).map(|(s, b)| s - b));
-        let s = &signal[..];
+        // Without atmosphere the background is zero and the samples are the
+        // signal.
+        let s = if wf.background.is_empty() {
+            &wf.samples[..]
+        } else {
+            signal.extend(wf.samples.iter().zip(&wf.background).map(|(s, b)| s - b));
+            &signal[..]
+        };
         let n = s.len();
         if n < 3 {
             return;

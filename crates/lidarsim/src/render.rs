@@ -605,7 +605,7 @@ impl WaveformPlot {
         let background_at = |bin: f64| {
             let i =
                 (bin.round() as i64 - wf.first_bin).clamp(0, wf.background.len().max(1) as i64 - 1);
-            wf.background.get(i as usize).copied().unwrap_or(0.0)
+            wf.background_at(i as usize)
         };
         let plot = Self {
             ranges_m: (0..wf.samples.len())
@@ -613,7 +613,9 @@ impl WaveformPlot {
                 .collect(),
             signal: wf.samples.clone(),
             returns: wf.impulses.clone(),
-            threshold: wf.background.iter().map(|b| b + threshold).collect(),
+            threshold: (0..wf.samples.len())
+                .map(|i| wf.background_at(i) + threshold)
+                .collect(),
             echoes: scratch
                 .echoes()
                 .iter()

@@ -128,13 +128,22 @@ pub struct Waveform {
     /// Received signal (returns convolved with the pulse, plus atmosphere
     /// and noise).
     pub samples: Vec<f64>,
-    /// Expected background (atmosphere) in each bin; zero without
-    /// atmosphere. Detection thresholds are set above it.
+    /// Expected background (atmosphere) in each bin; empty without
+    /// atmosphere, meaning zero everywhere ([`Waveform::background_at`]).
+    /// Detection thresholds are set above it.
     pub background: Vec<f64>,
     /// The returns placed on the time axis before convolution (kept to
     /// reuse the allocation; also the noise-free "sum of sub-ray returns"
     /// of specification Fig. 6).
     pub impulses: Vec<f64>,
+}
+
+impl Waveform {
+    /// Expected background in sample `i` (zero without atmosphere).
+    #[inline]
+    pub fn background_at(&self, i: usize) -> f64 {
+        self.background.get(i).copied().unwrap_or(0.0)
+    }
 }
 
 /// One sub-ray return on the time axis.
@@ -253,8 +262,8 @@ impl Receiver {
             }
         }
         // Atmosphere: path radiance falls with range squared.
-        out.background.resize(n, 0.0);
         if self.config.atmosphere > 0.0 {
+            out.background.resize(n, 0.0);
             for (i, bg) in out.background.iter_mut().enumerate() {
                 let range = bin_to_range((first + i as i64) as f64, bin_s).max(1.0);
                 *bg = self.config.atmosphere * (self.config.reference_range_m / range).powi(2);
