@@ -27,7 +27,7 @@ use crate::rng::{Purpose, Stream};
 use crate::scanner::{BeamPattern, Mirror};
 use crate::scene::{Shape, SurfaceClass};
 use crate::survey::Survey;
-use crate::waveform::{Receiver, Return, Waveform, range_to_bin};
+use crate::waveform::{Receiver, Return, Waveform};
 
 /// ASPRS class of an echo no surface contributed to (receiver noise).
 pub const NOISE_CLASS: u8 = 7;
@@ -329,8 +329,8 @@ impl<'a> Simulator<'a> {
             let lo = echo.first_bin as f64;
             let hi = echo.last_bin as f64 + 1.0;
             scratch.energy_by_prim.clear();
-            for (r, &p) in scratch.returns.iter().zip(&scratch.return_prims) {
-                let b = range_to_bin(r.range_m, bin_s);
+            let bins = &scratch.waveform.return_bins;
+            for ((r, &p), &b) in scratch.returns.iter().zip(&scratch.return_prims).zip(bins) {
                 if b < lo || b >= hi {
                     continue;
                 }
@@ -348,15 +348,11 @@ impl<'a> Simulator<'a> {
                 Some((p, _)) => {
                     // Incidence on the dominant surface: its normal where
                     // the first of its sub-rays in the echo met it.
-                    incidence_angle_deg = scratch
-                        .returns
+                    incidence_angle_deg = bins
                         .iter()
                         .zip(&scratch.return_prims)
                         .zip(&scratch.return_normals)
-                        .find(|((r, q), _)| {
-                            let b = range_to_bin(r.range_m, bin_s);
-                            **q == p && b >= lo && b < hi
-                        })
+                        .find(|((b, q), _)| **q == p && **b >= lo && **b < hi)
                         .filter(|(_, n)| n.is_finite())
                         .map(|(_, n)| central.dot(*n).abs().min(1.0).acos().to_degrees());
                     let prim = &scene.primitives[p as usize];

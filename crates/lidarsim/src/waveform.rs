@@ -136,6 +136,9 @@ pub struct Waveform {
     /// reuse the allocation; also the noise-free "sum of sub-ray returns"
     /// of specification Fig. 6).
     pub impulses: Vec<f64>,
+    /// Fractional absolute bin of each return, in the order given
+    /// ([`range_to_bin`] of its range, computed once per pulse).
+    pub return_bins: Vec<f64>,
 }
 
 impl Waveform {
@@ -216,13 +219,15 @@ impl Receiver {
         out.samples.clear();
         out.background.clear();
         out.impulses.clear();
+        out.return_bins.clear();
         if returns.is_empty() {
             return;
         }
         let bin_s = self.config.bin_s;
+        out.return_bins
+            .extend(returns.iter().map(|r| range_to_bin(r.range_m, bin_s)));
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for r in returns {
-            let x = range_to_bin(r.range_m, bin_s);
+        for &x in &out.return_bins {
             lo = lo.min(x);
             hi = hi.max(x);
         }
@@ -235,8 +240,7 @@ impl Receiver {
         let impulses = &mut out.impulses;
         impulses.clear();
         impulses.resize(n, 0.0);
-        for r in returns {
-            let x = range_to_bin(r.range_m, bin_s);
+        for (r, &x) in returns.iter().zip(&out.return_bins) {
             let b = x.floor();
             let f = x - b;
             let i = (b as i64 - first) as usize;

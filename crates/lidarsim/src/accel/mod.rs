@@ -47,9 +47,9 @@ pub struct PulseTrace {
     pub hits: Vec<Option<Hit>>,
     spans: Vec<VolumeSpan>,
     ranges: Vec<(u32, u32)>,
-    /// Working storage of bundle traversals: closest distance and primitive
-    /// of each sub-ray so far.
-    pub(crate) best: Vec<(f64, u32)>,
+    /// Working storage of bundle traversals: closest distance, primitive
+    /// and (for triangles; NaN otherwise) unit normal of each sub-ray so far.
+    pub(crate) best: Vec<(f64, u32, DVec3)>,
     /// Working storage of bundle traversals: volumes met by the bundle.
     pub(crate) volumes: Vec<u32>,
 }

@@ -279,6 +279,13 @@ impl TriangleFan {
         }
     }
 
+    /// The triangle's unit normal ([`Triangle::normal`]); zero before
+    /// [`TriangleFan::complete`].
+    #[inline]
+    pub fn normal(&self) -> DVec3 {
+        self.n
+    }
+
     /// Distance along the unit direction `d` to the triangle, if within
     /// `(t_min, t_max)`.
     #[inline]
