@@ -147,8 +147,12 @@ impl Detector {
             return;
         }
         // Candidate maxima above the threshold.
+        let thr = self.threshold;
         peaks.extend(
-            (1..n - 1).filter(|&b| s[b] > self.threshold && s[b] > s[b - 1] && s[b] >= s[b + 1]),
+            s.windows(3)
+                .enumerate()
+                .filter(|(_, w)| w[1] > thr && w[1] > w[0] && w[1] >= w[2])
+                .map(|(b, _)| b + 1),
         );
         // Keep those that stand out by the threshold: the higher of the two
         // valleys separating a peak from higher ground (or from the window

@@ -305,7 +305,12 @@ impl<'a> Simulator<'a> {
             (obs.position_m, obs.attitude, dir)
         };
         // Attributes shared by the pulse's points.
-        let right = obs_attitude.body_to_world() * DVec3::X;
+        let obs_body = if self.exact_georeferencing {
+            body
+        } else {
+            obs_attitude.body_to_world()
+        };
+        let right = obs_body * DVec3::X;
         let right_h = DVec3::new(right.x, right.y, 0.0).normalize_or_zero();
         let scan_angle_deg = obs_central.dot(right_h).atan2(-obs_central.z).to_degrees();
         let moving_left = mirror.moving_left_at(t);

@@ -253,11 +253,15 @@ impl Receiver {
         // The window has k0 + GUARD_BINS bins before the first impulse and
         // the kernel's tail + GUARD_BINS after the last, so the kernel
         // always fits.
-        for (i, &p) in out.impulses.iter().enumerate() {
+        // Only the bins from the earliest return to one past the latest can
+        // hold an impulse.
+        let touched =
+            (lo.floor() as i64 - first) as usize..(hi.floor() as i64 - first + 2) as usize;
+        for (i, &p) in out.impulses[touched.clone()].iter().enumerate() {
             if p == 0.0 {
                 continue;
             }
-            let start = i - self.k0;
+            let start = i + touched.start - self.k0;
             for (o, &k) in out.samples[start..start + self.kernel.len()]
                 .iter_mut()
                 .zip(&self.kernel)

@@ -660,7 +660,7 @@ impl RayCaster for Bvh {
                     };
                     oriented_hit(p, &ray, t, n)
                 });
-                out.push(hit, &[]);
+                out.push_surface(hit);
                 continue;
             }
             spans.clear();

@@ -71,6 +71,14 @@ impl PulseTrace {
         self.hits.push(hit);
     }
 
+    /// Records the result of the next sub-ray when it passes no volume.
+    #[inline]
+    pub fn push_surface(&mut self, hit: Option<Hit>) {
+        let at = self.spans.len() as u32;
+        self.ranges.push((at, at));
+        self.hits.push(hit);
+    }
+
     /// Volume spans of sub-ray `i`, sorted by entry distance.
     pub fn spans_of(&self, i: usize) -> &[VolumeSpan] {
         let (a, b) = self.ranges[i];
