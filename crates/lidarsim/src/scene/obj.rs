@@ -223,23 +223,24 @@ pub(crate) fn mapped_class(map: &[(String, SurfaceClass)], name: &str) -> Option
         .map(|(_, (_, c))| *c)
 }
 
-/// Loads an OBJ file into `scene` as triangles belonging to a new object.
-///
-/// `survey_materials` are the survey's `[materials]`, which take precedence
-/// over MTL materials of the same name. Returns the number of triangles
-/// added. Degenerate faces are skipped (and counted in the second value).
-pub fn load_obj(
-    path: &Path,
-    placement: &MeshPlacement,
-    survey_materials: &HashMap<String, Material>,
-    scene: &mut Scene,
-) -> Result<(usize, usize), MeshError> {
-    let text = std::fs::read(path).map_err(|source| MeshError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let base = path.parent().unwrap_or(Path::new("."));
+/// Faces of one OBJ group or object with one material: corners are
+/// indices into `positions` (x, y, z per vertex), three per triangle.
+struct Group<'a> {
+    name: &'a str,
+    material_id: Option<usize>,
+    positions: &'a [f64],
+    indices: &'a [u32],
+}
 
+/// The OBJ parser's reading of `text` (the file at `path`), with the
+/// survey's materials offered as one more library and every `mtllib` and
+/// `usemtl` checked with its line.
+fn parse_with_tobj(
+    text: &[u8],
+    path: &Path,
+    base: &Path,
+    survey_materials: &HashMap<String, Material>,
+) -> Result<(Vec<tobj::Model>, Vec<tobj::Material>), MeshError> {
     // Collect `mtllib` and `usemtl` statements with their lines first, so
     // that errors can name the line (the OBJ parser does not).
     let mut libraries = Vec::new();
@@ -308,7 +309,6 @@ pub fn load_obj(
         },
     })?;
     let mtl_materials = materials.unwrap_or_default();
-
     for (line, name) in &uses {
         if !survey_materials.contains_key(name) && !mtl_materials.iter().any(|m| &m.name == name) {
             return Err(MeshError::UnknownMaterial {
@@ -318,6 +318,125 @@ pub fn load_obj(
             });
         }
     }
+    Ok((models, mtl_materials))
+}
+
+/// An OBJ file of the plainest kind, read without the OBJ parser: its
+/// vertices and, per group, triangles.
+struct PlainObj {
+    positions: Vec<f64>,
+    /// Group name and its corner indices (0-based, three per triangle).
+    groups: Vec<(String, Vec<u32>)>,
+}
+
+impl PlainObj {
+    fn groups(&self) -> Vec<Group<'_>> {
+        self.groups
+            .iter()
+            .map(|(name, indices)| Group {
+                name,
+                material_id: None,
+                positions: &self.positions,
+                indices,
+            })
+            .collect()
+    }
+}
+
+/// Reads `text` if it holds only blank lines, `#` comments, `s` lines,
+/// vertices `v x y z`, triangles `f i j k` of vertex indices (1-based, or
+/// negative from the last vertex) of vertices defined before them, and
+/// `o`/`g` names; `None` for anything else (materials, texture
+/// coordinates, normals, polygons, problems), which the OBJ parser reads.
+/// The result is the OBJ parser's to the bit: the same numbers (both parse
+/// with `str::parse::<f64>`), the same groups (a name closes the faces
+/// before it; the last group always counts, as the parser keeps it).
+fn plain_obj(text: &[u8]) -> Option<PlainObj> {
+    let mut positions: Vec<f64> = Vec::with_capacity(text.len() / 40);
+    let mut groups = Vec::new();
+    let mut name = "unnamed_object".to_string();
+    let mut faces: Vec<u32> = Vec::new();
+    for raw in text.split(|&b| b == b'\n') {
+        let raw = raw.strip_suffix(b"\r").unwrap_or(raw);
+        let line = std::str::from_utf8(raw).ok()?;
+        let mut words = line.split_whitespace();
+        match words.next() {
+            None | Some("#") | Some("s") => {}
+            Some("v") => {
+                for _ in 0..3 {
+                    positions.push(words.next()?.parse::<f64>().ok()?);
+                }
+                if words.next().is_some() {
+                    return None;
+                }
+            }
+            Some("f") => {
+                let defined = (positions.len() / 3) as i64;
+                for _ in 0..3 {
+                    let k: i64 = words.next()?.parse().ok()?;
+                    let index = if k > 0 { k - 1 } else { defined + k };
+                    if !(0..defined).contains(&index) {
+                        return None;
+                    }
+                    faces.push(index as u32);
+                }
+                if words.next().is_some() {
+                    return None;
+                }
+            }
+            Some("o") | Some("g") if line.starts_with(['o', 'g']) => {
+                if !faces.is_empty() {
+                    groups.push((std::mem::take(&mut name), std::mem::take(&mut faces)));
+                }
+                name = line[1..].trim().to_string();
+                if name.is_empty() {
+                    name = "unnamed_object".to_string();
+                }
+            }
+            Some(_) => return None,
+        }
+    }
+    groups.push((name, faces));
+    Some(PlainObj { positions, groups })
+}
+
+/// Loads an OBJ file into `scene` as triangles belonging to a new object.
+///
+/// `survey_materials` are the survey's `[materials]`, which take precedence
+/// over MTL materials of the same name. Returns the number of triangles
+/// added. Degenerate faces are skipped (and counted in the second value).
+pub fn load_obj(
+    path: &Path,
+    placement: &MeshPlacement,
+    survey_materials: &HashMap<String, Material>,
+    scene: &mut Scene,
+) -> Result<(usize, usize), MeshError> {
+    let text = std::fs::read(path).map_err(|source| MeshError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    // Plain files (vertices, triangles, groups) take the fast reader; the
+    // others, and every file with a problem to report, the OBJ parser.
+    let plain = plain_obj(&text);
+    let parsed;
+    let (groups, mtl_materials) = match &plain {
+        Some(p) => (p.groups(), Vec::new()),
+        None => {
+            parsed = parse_with_tobj(&text, path, base, survey_materials)?;
+            let groups = parsed
+                .0
+                .iter()
+                .map(|m| Group {
+                    name: &m.name,
+                    material_id: m.mesh.material_id,
+                    positions: &m.mesh.positions,
+                    indices: &m.mesh.indices,
+                })
+                .collect();
+            (groups, parsed.1.clone())
+        }
+    };
 
     // Resolve every MTL material to a scene material and class hint.
     let mut resolved: Vec<(u32, Option<SurfaceClass>)> = Vec::with_capacity(mtl_materials.len());
@@ -346,8 +465,8 @@ pub fn load_obj(
         .map(|m| scene.add_material(m));
 
     for (pattern, _) in &placement.class_map {
-        if !models.iter().any(|m| glob_match(pattern, &m.name)) {
-            let mut names: Vec<&str> = models.iter().map(|m| m.name.as_str()).collect();
+        if !groups.iter().any(|g| glob_match(pattern, g.name)) {
+            let mut names: Vec<&str> = groups.iter().map(|g| g.name).collect();
             names.dedup();
             return Err(MeshError::UnmatchedClassPattern {
                 path: path.to_path_buf(),
@@ -367,19 +486,18 @@ pub fn load_obj(
         rotation * (DVec3::new(x, y, z) * placement.scale) + placement.offset_m
     };
     let (mut added, mut skipped) = (0usize, 0usize);
-    for model in &models {
-        let mesh = &model.mesh;
-        let (material, class_hint) = match mesh.material_id {
+    for group in &groups {
+        let (material, class_hint) = match group.material_id {
             Some(id) => *resolved.get(id).ok_or_else(|| MeshError::Parse {
                 path: path.to_path_buf(),
                 reason: format!(
                     "object '{}' uses a material that was not loaded",
-                    model.name
+                    group.name
                 ),
             })?,
             None => match default_material {
                 Some(m) => (m, None),
-                None if mesh.indices.is_empty() => continue,
+                None if group.indices.is_empty() => continue,
                 None => {
                     return Err(MeshError::NoMaterial {
                         path: path.to_path_buf(),
@@ -387,18 +505,18 @@ pub fn load_obj(
                 }
             },
         };
-        let class = mapped_class(&placement.class_map, &model.name)
+        let class = mapped_class(&placement.class_map, group.name)
             .or(class_hint)
-            .or_else(|| class_from_name(&model.name))
+            .or_else(|| class_from_name(group.name))
             .unwrap_or(placement.default_class);
         let corner = |k: u32| {
             let k = k as usize * 3;
-            match mesh.positions.get(k..k + 3) {
+            match group.positions.get(k..k + 3) {
                 Some(p) => place(p[0], p[1], p[2]),
                 None => DVec3::NAN,
             }
         };
-        for face in mesh.indices.chunks_exact(3) {
+        for face in group.indices.chunks_exact(3) {
             match Triangle::new(corner(face[0]), corner(face[1]), corner(face[2])) {
                 Some(t) => {
                     scene.primitives.push(Primitive {
@@ -481,6 +599,92 @@ pub(crate) fn class_from_name(name: &str) -> Option<SurfaceClass> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Per group: name, material and each triangle's corner coordinates.
+    type Faces = Vec<(String, Option<usize>, Vec<[f64; 9]>)>;
+
+    fn faces(groups: &[Group]) -> Faces {
+        groups
+            .iter()
+            .map(|g| {
+                let corner = |k: u32| &g.positions[k as usize * 3..k as usize * 3 + 3];
+                let tris = g
+                    .indices
+                    .chunks_exact(3)
+                    .map(|f| {
+                        let mut t = [0.0; 9];
+                        for (i, &k) in f.iter().enumerate() {
+                            t[3 * i..3 * i + 3].copy_from_slice(corner(k));
+                        }
+                        t
+                    })
+                    .collect();
+                (g.name.to_string(), g.material_id, tris)
+            })
+            .collect()
+    }
+
+    /// The fast reader of plain files gives the OBJ parser's groups and
+    /// corners to the bit, and leaves every other kind of file to it.
+    #[test]
+    fn plain_reader_matches_the_obj_parser() {
+        let plain = [
+            "v 0 0 0\nv 1 0 0\nv 0 1 0.1\nf 1 2 3\n",
+            "# comment\n\ng roof_1\nv 0.1 0.2 0.3\nv 1e1 -2.5 3\r\nv 7 8 9.000000001\ns off\nf -3 -2 -1\nf 3 1 2\n\
+             o wall north\ng empty\ng\nv 5 5 5\nf 1 2 4\ng last\n",
+            "g a\nv 1 2 3\nv 4 5 6\nv 7 8 10\nf 1 2 3\ng b\nf 2 3 1\ng a\nf 3 1 2\n",
+            "",
+        ];
+        let dir = std::env::temp_dir();
+        for (i, text) in plain.iter().enumerate() {
+            let fast = plain_obj(text.as_bytes()).unwrap_or_else(|| panic!("case {i} not plain"));
+            let (models, _) =
+                parse_with_tobj(text.as_bytes(), Path::new("t.obj"), &dir, &HashMap::new())
+                    .unwrap();
+            let parsed: Vec<Group> = models
+                .iter()
+                .map(|m| Group {
+                    name: &m.name,
+                    material_id: m.mesh.material_id,
+                    positions: &m.mesh.positions,
+                    indices: &m.mesh.indices,
+                })
+                .collect();
+            assert_eq!(faces(&fast.groups()), faces(&parsed), "case {i}");
+        }
+        // The benchmark's buildings file.
+        let path = dir.join(format!("lidarsim-plain-{}.obj", std::process::id()));
+        crate::bench::write_boxes_obj(crate::bench::BenchScene::Flat, &path).unwrap();
+        let text = std::fs::read(&path).unwrap();
+        let _ = std::fs::remove_file(&path);
+        let fast = plain_obj(&text).unwrap();
+        let (models, _) = parse_with_tobj(&text, &path, &dir, &HashMap::new()).unwrap();
+        let parsed: Vec<Group> = models
+            .iter()
+            .map(|m| Group {
+                name: &m.name,
+                material_id: m.mesh.material_id,
+                positions: &m.mesh.positions,
+                indices: &m.mesh.indices,
+            })
+            .collect();
+        assert!(faces(&parsed).iter().map(|g| g.2.len()).sum::<usize>() > 50);
+        assert_eq!(faces(&fast.groups()), faces(&parsed));
+        // Anything else is the parser's.
+        for other in [
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 4 3\n",
+            "v 0 0 0\nvt 0 0\nv 1 0 0\nv 0 1 0\nf 1/1 2/1 3/1\n",
+            "v 0 0 0 1\n",
+            "usemtl x\n",
+            "f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n",
+            "v 0 0 0\nf 0 1 1\n",
+            " g indented\n",
+            "v 0 0 zero\n",
+            "l 1 2\n",
+        ] {
+            assert!(plain_obj(other.as_bytes()).is_none(), "{other:?}");
+        }
+    }
 
     #[test]
     fn glob_patterns() {
