@@ -279,7 +279,7 @@ fn parse_with_tobj(
     // material library, named by a line put in front of the file, so that
     // `usemtl NAME` of a survey-only material starts its own group of faces.
     let prefix = format!("mtllib {SURVEY_LIBRARY}\n").into_bytes();
-    let mut source = BufReader::new(std::io::Read::chain(&prefix[..], &text[..]));
+    let mut source = BufReader::new(std::io::Read::chain(&prefix[..], text));
     let (models, materials) = tobj::load_obj_buf(&mut source, &options, |p| {
         if p == Path::new(SURVEY_LIBRARY) {
             let mut names: Vec<&String> = survey_materials.keys().collect();
@@ -303,7 +303,7 @@ fn parse_with_tobj(
     })
     .map_err(|e| MeshError::Parse {
         path: path.to_path_buf(),
-        reason: match first_bad_line(&text) {
+        reason: match first_bad_line(text) {
             Some((line, why)) => format!("line {line}: {why}"),
             None => e.to_string(),
         },
