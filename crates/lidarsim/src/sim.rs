@@ -194,10 +194,13 @@ impl<'a> Simulator<'a> {
         let body = pose.attitude.body_to_world();
         let rot = body * self.boresight * SCANNER_TO_LEVEL_NORTH;
         let origin = pose.position_m + body * s.navigation.lever_arm_m;
-        let central = rot * Mirror::beam_direction(theta);
+        // The deflection's third column is the beam direction
+        // (`Mirror::beam_direction`), from the same sine and cosine.
+        let deflection = BeamPattern::deflection(theta);
+        let central = rot * deflection.z_axis;
 
         // Sub-rays in the world frame, cast as one pulse.
-        let to_world = rot * BeamPattern::deflection(theta);
+        let to_world = rot * deflection;
         scratch.dirs.clear();
         scratch
             .dirs
@@ -215,8 +218,11 @@ impl<'a> Simulator<'a> {
         // lottery), then Eq. 2 at the surface it reaches.
         let scene = self.caster.scene();
         let rn = s.receiver.reference_range_m;
-        let mut speckle_rng = Stream::new(s.seed, line.index, k, Purpose::Speckle);
-        let mut canopy_rng = Stream::new(s.seed, line.index, k, Purpose::Canopy);
+        // Random streams are keyed by pulse and purpose, so creating them
+        // only when first needed gives the same numbers.
+        let stream = |purpose| Stream::new(s.seed, line.index, k, purpose);
+        let mut speckle_rng: Option<Stream> = None;
+        let mut canopy_rng: Option<Stream> = None;
         scratch.returns.clear();
         scratch.return_prims.clear();
         scratch.return_normals.clear();
@@ -226,7 +232,8 @@ impl<'a> Simulator<'a> {
                 Fate::Passed { transmission: 1.0 }
             } else {
                 let ray = Ray { origin, dir: *dir };
-                march(scene, &ray, spans, &self.canopy, &mut canopy_rng)
+                let rng = canopy_rng.get_or_insert_with(|| stream(Purpose::Canopy));
+                march(scene, &ray, spans, &self.canopy, rng)
             };
             let (range_m, prim, mut power, normal) = match fate {
                 Fate::Intercepted {
@@ -261,7 +268,7 @@ impl<'a> Simulator<'a> {
                 }
             };
             if let Some(sp) = &self.speckle {
-                power *= sp.factor(&mut speckle_rng);
+                power *= sp.factor(speckle_rng.get_or_insert_with(|| stream(Purpose::Speckle)));
             }
             scratch.returns.push(Return { range_m, power });
             scratch.return_prims.push(prim);
@@ -291,13 +298,23 @@ impl<'a> Simulator<'a> {
         // (GNSS/IMU errors), no boresight or lever arm, the encoder's angle
         // and the measured ranges (navigation.rs).
         let nav = &s.navigation;
-        let mut measure = Stream::new(s.seed, line.index, k, Purpose::Measurement);
+        let mut measure: Option<Stream> = None;
         let (obs_origin, obs_attitude, obs_central) = if self.exact_georeferencing {
             (origin, pose.attitude, central)
         } else {
-            let obs = observed_pose(&pose, nav, &line.nav_errors, t_line, Some(&mut measure));
+            let obs = observed_pose(
+                &pose,
+                nav,
+                &line.nav_errors,
+                t_line,
+                Some(measure.get_or_insert_with(|| stream(Purpose::Measurement))),
+            );
             let theta_obs = if nav.encoder_sigma_rad > 0.0 {
-                theta + nav.encoder_sigma_rad * measure.normal()
+                theta
+                    + nav.encoder_sigma_rad
+                        * measure
+                            .get_or_insert_with(|| stream(Purpose::Measurement))
+                            .normal()
             } else {
                 theta
             };
@@ -323,7 +340,11 @@ impl<'a> Simulator<'a> {
         for (i, echo) in scratch.echoes.iter().enumerate() {
             let truth = origin + central * echo.range_m;
             let measured_range = if nav.range_sigma_m > 0.0 {
-                echo.range_m + nav.range_sigma_m * measure.normal()
+                echo.range_m
+                    + nav.range_sigma_m
+                        * measure
+                            .get_or_insert_with(|| stream(Purpose::Measurement))
+                            .normal()
             } else {
                 echo.range_m
             };
@@ -436,6 +457,9 @@ impl<'a> Simulator<'a> {
     /// the receiver synthesised: from before the first sub-ray return by the
     /// pulse's rise to after the last by its tail, see
     /// [`Receiver::synthesize`]).
+    // Kept out of line: profiles (scripts/profile_bench.sh) count the
+    // instructions under it, whatever the inlining around it.
+    #[inline(never)]
     pub fn simulate_block_recording(
         &self,
         line: &FlightLine,
