@@ -250,14 +250,19 @@ fn prominence(s: &[f64], p: usize) -> f64 {
         if s[i] > h {
             break;
         }
-        left_min = left_min.min(s[i]);
+        // A comparison rather than `f64::min`: the samples are finite.
+        if s[i] < left_min {
+            left_min = s[i];
+        }
     }
     let mut right_min = h;
     for &v in &s[p + 1..] {
         if v > h {
             break;
         }
-        right_min = right_min.min(v);
+        if v < right_min {
+            right_min = v;
+        }
     }
     h - left_min.max(right_min)
 }

@@ -228,8 +228,13 @@ impl Receiver {
             .extend(returns.iter().map(|r| range_to_bin(r.range_m, bin_s)));
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
         for &x in &out.return_bins {
-            lo = lo.min(x);
-            hi = hi.max(x);
+            // Comparisons rather than `f64::min`/`max`: bins are finite.
+            if x < lo {
+                lo = x;
+            }
+            if x > hi {
+                hi = x;
+            }
         }
         let k0 = self.k0 as i64;
         let ka = self.kernel.len() as i64 - 1 - k0;

@@ -599,7 +599,9 @@ impl RayCaster for Bvh {
                     }
                 }
                 if missing == 0 {
-                    far = best.iter().fold(0.0f64, |m, b| m.max(b.0));
+                    far = best
+                        .iter()
+                        .fold(0.0f64, |m, b| if b.0 > m { b.0 } else { m });
                 }
             } else {
                 let l = n.left_or_first as usize;
@@ -642,27 +644,35 @@ impl RayCaster for Bvh {
         // Triangle hits carry their normal from the test; other sub-rays
         // mostly hit the same flat primitive, whose normal is computed once.
         let mut flat: Option<(u32, DVec3)> = None;
-        for (dir, &(t, p, normal)) in dirs.iter().zip(best.iter()) {
-            let ray = Ray { origin, dir: *dir };
-            if volumes.is_empty() {
+        if volumes.is_empty() {
+            for (dir, &(t, p, normal)) in dirs.iter().zip(best.iter()) {
                 let hit = (p != u32::MAX).then(|| {
                     let n = match flat {
                         _ if !normal.x.is_nan() => normal,
                         Some((q, n)) if q == p => n,
                         _ => {
                             let prim = &self.scene.primitives[p as usize];
-                            let n = prim.normal_at(ray.at(t));
+                            let n = prim.normal_at(origin + *dir * t);
                             if prim.is_flat() {
                                 flat = Some((p, n));
                             }
                             n
                         }
                     };
-                    oriented_hit(p, &ray, t, n)
+                    Hit {
+                        t,
+                        prim: p,
+                        normal: if n.dot(*dir) > 0.0 { -n } else { n },
+                    }
                 });
                 out.push_surface(hit);
-                continue;
             }
+            out.best = best;
+            out.volumes = volumes;
+            return;
+        }
+        for (dir, &(t, p, normal)) in dirs.iter().zip(best.iter()) {
+            let ray = Ray { origin, dir: *dir };
             spans.clear();
             for &v in &volumes {
                 if let Some(s) = volume_span(&self.scene.primitives[v as usize], v, &ray, t_min, t)
@@ -746,10 +756,16 @@ impl Bundle {
     fn new(o: DVec3, dirs: &[DVec3]) -> Self {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
+        // Plain comparisons: the components are finite, so these are the
+        // bounds `f64::min`/`max` give, without their NaN handling.
         for d in dirs {
             for a in 0..3 {
-                lo[a] = lo[a].min(d[a]);
-                hi[a] = hi[a].max(d[a]);
+                if d[a] < lo[a] {
+                    lo[a] = d[a];
+                }
+                if d[a] > hi[a] {
+                    hi[a] = d[a];
+                }
             }
         }
         let mut sign = [Sign::Straddles; 3];

@@ -71,18 +71,20 @@ impl PulseTrace {
         self.hits.push(hit);
     }
 
-    /// Records the result of the next sub-ray when it passes no volume.
+    /// Records the result of the next sub-ray of a pulse none of whose
+    /// sub-rays passes a volume (a pulse is recorded either with this or
+    /// with [`PulseTrace::push`]).
     #[inline]
     pub fn push_surface(&mut self, hit: Option<Hit>) {
-        let at = self.spans.len() as u32;
-        self.ranges.push((at, at));
         self.hits.push(hit);
     }
 
     /// Volume spans of sub-ray `i`, sorted by entry distance.
     pub fn spans_of(&self, i: usize) -> &[VolumeSpan] {
-        let (a, b) = self.ranges[i];
-        &self.spans[a as usize..b as usize]
+        match self.ranges.get(i) {
+            Some(&(a, b)) => &self.spans[a as usize..b as usize],
+            None => &[],
+        }
     }
 }
 

@@ -317,7 +317,7 @@ pub fn bundle_spread(dirs: &[DVec3]) -> (DVec3, f64) {
     let spread = dirs
         .iter()
         .map(|d| (*d - axis).length_squared())
-        .fold(0.0f64, f64::max)
+        .fold(0.0f64, |m, x| if x > m { x } else { m })
         .sqrt();
     (axis, spread * (1.0 + 1e-9) + 1e-9)
 }
