@@ -267,8 +267,9 @@ fn prominence(s: &[f64], p: usize) -> f64 {
     h - left_min.max(right_min)
 }
 
-/// Index of the smallest sample in `a..=b` (the first of equals, in the
-/// total order of `f64`).
+/// Index of the smallest sample in `a..=b` (the first of equals). Samples
+/// are finite and never −0 (they are sums that start at +0), so `<` is the
+/// total order of `f64` here.
 fn argmin(s: &[f64], a: usize, b: usize) -> usize {
     let Some(window) = s.get(a..=b) else {
         return a;
@@ -276,7 +277,7 @@ fn argmin(s: &[f64], a: usize, b: usize) -> usize {
     let mut best = 0;
     let mut min = window[0];
     for (i, &v) in window.iter().enumerate().skip(1) {
-        if v.total_cmp(&min).is_lt() {
+        if v < min {
             best = i;
             min = v;
         }
