@@ -321,6 +321,19 @@ fn parse_with_tobj(
     Ok((models, mtl_materials))
 }
 
+/// The OBJ parser's models as groups of faces.
+fn tobj_groups(models: &[tobj::Model]) -> Vec<Group<'_>> {
+    models
+        .iter()
+        .map(|m| Group {
+            name: &m.name,
+            material_id: m.mesh.material_id,
+            positions: &m.mesh.positions,
+            indices: &m.mesh.indices,
+        })
+        .collect()
+}
+
 /// An OBJ file of the plainest kind, read without the OBJ parser: its
 /// vertices and, per group, triangles.
 struct PlainObj {
@@ -424,17 +437,7 @@ pub fn load_obj(
         Some(p) => (p.groups(), Vec::new()),
         None => {
             parsed = parse_with_tobj(&text, path, base, survey_materials)?;
-            let groups = parsed
-                .0
-                .iter()
-                .map(|m| Group {
-                    name: &m.name,
-                    material_id: m.mesh.material_id,
-                    positions: &m.mesh.positions,
-                    indices: &m.mesh.indices,
-                })
-                .collect();
-            (groups, parsed.1.clone())
+            (tobj_groups(&parsed.0), parsed.1.clone())
         }
     };
 
@@ -641,15 +644,7 @@ mod tests {
             let (models, _) =
                 parse_with_tobj(text.as_bytes(), Path::new("t.obj"), &dir, &HashMap::new())
                     .unwrap();
-            let parsed: Vec<Group> = models
-                .iter()
-                .map(|m| Group {
-                    name: &m.name,
-                    material_id: m.mesh.material_id,
-                    positions: &m.mesh.positions,
-                    indices: &m.mesh.indices,
-                })
-                .collect();
+            let parsed = tobj_groups(&models);
             assert_eq!(faces(&fast.groups()), faces(&parsed), "case {i}");
         }
         // The benchmark's buildings file.
@@ -659,15 +654,7 @@ mod tests {
         let _ = std::fs::remove_file(&path);
         let fast = plain_obj(&text).unwrap();
         let (models, _) = parse_with_tobj(&text, &path, &dir, &HashMap::new()).unwrap();
-        let parsed: Vec<Group> = models
-            .iter()
-            .map(|m| Group {
-                name: &m.name,
-                material_id: m.mesh.material_id,
-                positions: &m.mesh.positions,
-                indices: &m.mesh.indices,
-            })
-            .collect();
+        let parsed = tobj_groups(&models);
         assert!(faces(&parsed).iter().map(|g| g.2.len()).sum::<usize>() > 50);
         assert_eq!(faces(&fast.groups()), faces(&parsed));
         // Anything else is the parser's.
