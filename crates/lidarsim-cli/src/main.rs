@@ -14,7 +14,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use lidarsim::Survey;
 use lidarsim::accel::Bvh;
 use lidarsim::plan::plan;
-use lidarsim::run::{RunOptions, Summary, run_to_dir};
+use lidarsim::run::{RunOptions, Summary, run_survey_to_dir};
 
 /// Prints a line to standard error, ignoring a closed pipe (`2>&1 | head`).
 macro_rules! note {
@@ -400,8 +400,10 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
         ProgressBar::hidden()
     };
     let progress = |done: u64| bar.set_position(done);
-    let result = run_to_dir(
-        &survey,
+    let name = source_name(&survey);
+    // The survey is not needed afterwards: its scene moves into the BVH.
+    let result = run_survey_to_dir(
+        survey,
         output,
         &RunOptions {
             threads,
@@ -410,7 +412,7 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
             resume,
             pulse_budget: None,
             on_warning: Some(&|w: &str| {
-                bar.suspend(|| note!("warning: {}: {w}", source_name(&survey)));
+                bar.suspend(|| note!("warning: {name}: {w}"));
             }),
         },
     );
