@@ -550,14 +550,11 @@ impl RayCaster for Bvh {
         spans: &mut Vec<VolumeSpan>,
         out: &mut PulseTrace,
     ) {
-        out.clear();
         if self.nodes.is_empty() || dirs.len() < 2 {
-            for dir in dirs {
-                let hit = self.trace(&Ray { origin, dir: *dir }, t_min, t_max, spans);
-                out.push(hit, spans);
-            }
+            self.trace_each(origin, dirs, t_min, t_max, spans, out);
             return;
         }
+        out.clear();
         let bundle = Bundle::new(origin - self.origin, dirs);
         let cone = bundle_spread(dirs);
         let mut best = std::mem::take(&mut out.best);

@@ -126,6 +126,20 @@ pub trait RayCaster: Send + Sync {
         spans: &mut Vec<VolumeSpan>,
         out: &mut PulseTrace,
     ) {
+        self.trace_each(origin, dirs, t_min, t_max, spans, out);
+    }
+
+    /// [`RayCaster::trace_pulse`] by tracing each sub-ray on its own (the
+    /// default, and the fallback of structures with a faster bundle path).
+    fn trace_each(
+        &self,
+        origin: DVec3,
+        dirs: &[DVec3],
+        t_min: f64,
+        t_max: f64,
+        spans: &mut Vec<VolumeSpan>,
+        out: &mut PulseTrace,
+    ) {
         out.clear();
         for dir in dirs {
             let hit = self.trace(&Ray { origin, dir: *dir }, t_min, t_max, spans);
