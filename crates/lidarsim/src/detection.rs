@@ -123,17 +123,14 @@ impl Detector {
     }
 
     /// Detects the echoes of `wf` into `out` (cleared first), in time order.
-    /// `signal` and `peaks` are scratch space.
-    pub fn detect(
-        &self,
-        wf: &Waveform,
-        signal: &mut Vec<f64>,
-        peaks: &mut Vec<usize>,
-        out: &mut Vec<Echo>,
-    ) {
+    pub fn detect(&self, wf: &Waveform, scratch: &mut DetectScratch, out: &mut Vec<Echo>) {
         out.clear();
+        let DetectScratch {
+            signal,
+            peaks,
+            valleys,
+        } = scratch;
         signal.clear();
-        peaks.clear();
         // Without atmosphere the background is zero and the samples are the
         // signal.
         let s = if wf.background.is_empty() {
@@ -142,42 +139,21 @@ impl Detector {
             signal.extend(wf.samples.iter().zip(&wf.background).map(|(s, b)| s - b));
             &signal[..]
         };
-        let n = s.len();
-        if n < 3 {
+        if s.len() < 3 {
+            peaks.clear();
             return;
         }
-        // Candidate maxima above the threshold.
-        let thr = self.threshold;
-        peaks.extend(
-            s.windows(3)
-                .enumerate()
-                .filter(|(_, w)| w[1] > thr && w[1] > w[0] && w[1] >= w[2])
-                .map(|(b, _)| b + 1),
-        );
-        // Keep those that stand out by the threshold: the higher of the two
-        // valleys separating a peak from higher ground (or from the window
-        // edge) must lie at least the threshold below it.
-        peaks.retain(|&p| prominence(s, p) >= self.threshold);
-        // An echo cannot be much narrower than the emitted pulse: a maximum
-        // narrower than half of it is a noise spike, not a target. Its width
-        // is measured halfway between its top and its base (the higher of
-        // the valleys separating it from its neighbours), so that a spike
-        // riding on the tail of a strong echo shows its own width.
-        let mut k = 0;
-        while k < peaks.len() {
-            let (lo, hi) = extent(s, peaks, k);
-            let p = peaks[k];
-            let base = s[argmin(s, lo, p)].max(s[argmin(s, p, hi)]).max(0.0);
-            let level = 0.5 * (s[p] + base);
-            if width_at(s, p, lo, hi, level) < self.min_width_bins {
-                peaks.remove(k);
-            } else {
-                k += 1;
-            }
-        }
-        peaks.truncate(self.config.max_returns);
+        self.select(s, peaks, valleys);
+        let n = s.len();
         for (k, &p) in peaks.iter().enumerate() {
-            let (lo, hi) = extent(s, peaks, k);
+            // The bins attributed to the peak: down to the lowest points
+            // between it and its neighbouring peaks, or to the window's ends.
+            let lo = if k == 0 { 0 } else { valleys[k - 1] };
+            let hi = if k + 1 < peaks.len() {
+                valleys[k]
+            } else {
+                n - 1
+            };
             let (offset, peak_amplitude) = refine(s, p, self.fit_half, lo, hi);
             let width = half_max_width(s, p, lo, hi);
             let amplitude = energy(s, p, width, lo, hi) / self.unit_energy;
@@ -195,6 +171,90 @@ impl Detector {
             });
         }
     }
+
+    /// The maxima of `s` (at least 3 samples) that are echoes, first in
+    /// time first, up to `max_returns`, into `peaks`; `valleys[k]` is the
+    /// first lowest sample between `peaks[k]` and `peaks[k + 1]`.
+    ///
+    /// This is `select_by_definition` of the tests (the rules in the order the module
+    /// documentation gives them) in one scan per rule: the lowest points
+    /// between neighbouring peaks are found once, and when a peak is dropped
+    /// the two valleys around it merge into the lower one (the earlier of
+    /// equals, as a scan would find it) instead of being searched again.
+    fn select(&self, s: &[f64], peaks: &mut Vec<usize>, valleys: &mut Vec<usize>) {
+        peaks.clear();
+        valleys.clear();
+        let n = s.len();
+        let thr = self.threshold;
+        // Candidate maxima above the threshold that stand out by the
+        // threshold: the higher of the two valleys separating a peak from
+        // higher ground (or from the window edge) must lie at least the
+        // threshold below it.
+        for i in 1..n - 1 {
+            let v = s[i];
+            if v > thr && v > s[i - 1] && v >= s[i + 1] && prominence(s, i) >= thr {
+                peaks.push(i);
+            }
+        }
+        let Some(&first) = peaks.first() else {
+            return;
+        };
+        valleys.extend(peaks.windows(2).map(|w| argmin(s, w[0], w[1])));
+        // The lowest samples between the window's ends and the outer peaks.
+        let mut left = argmin(s, 0, first);
+        let right = argmin(s, peaks[peaks.len() - 1], n - 1);
+        // The earlier of two valleys, `a` before `b`, unless `b` is lower.
+        let lower = |a: usize, b: usize| if s[a] <= s[b] { a } else { b };
+        // An echo cannot be much narrower than the emitted pulse: a maximum
+        // narrower than half of it is a noise spike, not a target. Its width
+        // is measured halfway between its top and its base (the higher of
+        // the valleys separating it from its neighbours), so that a spike
+        // riding on the tail of a strong echo shows its own width.
+        let mut k = 0;
+        while k < peaks.len() {
+            let last = peaks.len() - 1;
+            let p = peaks[k];
+            let (lo, left_min) = if k == 0 {
+                (0, s[left])
+            } else {
+                (valleys[k - 1], s[valleys[k - 1]])
+            };
+            let (hi, right_min) = if k == last {
+                (n - 1, s[right])
+            } else {
+                (valleys[k], s[valleys[k]])
+            };
+            let base = left_min.max(right_min).max(0.0);
+            let level = 0.5 * (s[p] + base);
+            if width_at(s, p, lo, hi, level) >= self.min_width_bins {
+                k += 1;
+                continue;
+            }
+            // Dropping the last peak ends the scan: the lowest point after
+            // its left neighbour is never needed.
+            if k == last {
+                valleys.pop();
+            } else if k == 0 {
+                left = lower(left, valleys.remove(0));
+            } else {
+                valleys[k - 1] = lower(valleys[k - 1], valleys.remove(k));
+            }
+            peaks.remove(k);
+        }
+        peaks.truncate(self.config.max_returns);
+        valleys.truncate(peaks.len().saturating_sub(1));
+    }
+}
+
+/// Scratch space of [`Detector::detect`], reused from pulse to pulse.
+#[derive(Clone, Debug, Default)]
+pub struct DetectScratch {
+    /// Samples minus background (used only with an atmosphere).
+    signal: Vec<f64>,
+    /// Sample indices of the echoes.
+    peaks: Vec<usize>,
+    /// Lowest samples between neighbouring echoes.
+    valleys: Vec<usize>,
 }
 
 /// Calibrates the peak fit on the emitted pulse: for 256 sub-bin phases of
@@ -223,23 +283,6 @@ fn bias_table(receiver: &Receiver, fit_half: usize) -> Vec<(f64, f64)> {
         .collect();
     table.sort_by(|a, b| a.0.total_cmp(&b.0));
     table
-}
-
-/// The bins attributed to the `k`-th peak: down to the lowest points
-/// between it and its neighbouring peaks, or to the window's ends.
-fn extent(s: &[f64], peaks: &[usize], k: usize) -> (usize, usize) {
-    let p = peaks[k];
-    let lo = if k == 0 {
-        0
-    } else {
-        argmin(s, peaks[k - 1], p)
-    };
-    let hi = if k + 1 < peaks.len() {
-        argmin(s, p, peaks[k + 1])
-    } else {
-        s.len() - 1
-    };
-    (lo, hi)
 }
 
 /// Topographic prominence of the maximum at `p`.
@@ -398,6 +441,129 @@ mod tests {
     use crate::rng::{Purpose, Stream};
     use crate::waveform::{PulseShape, ReceiverConfig, Return};
 
+    /// The peak selection as first written: each rule a separate pass,
+    /// every extent searched afresh.
+    fn select_by_definition(det: &Detector, s: &[f64]) -> Vec<usize> {
+        let extent = |peaks: &[usize], k: usize| {
+            let p = peaks[k];
+            let lo = if k == 0 {
+                0
+            } else {
+                argmin(s, peaks[k - 1], p)
+            };
+            let hi = if k + 1 < peaks.len() {
+                argmin(s, p, peaks[k + 1])
+            } else {
+                s.len() - 1
+            };
+            (lo, hi)
+        };
+        let thr = det.threshold;
+        let mut peaks: Vec<usize> = s
+            .windows(3)
+            .enumerate()
+            .filter(|(_, w)| w[1] > thr && w[1] > w[0] && w[1] >= w[2])
+            .map(|(b, _)| b + 1)
+            .collect();
+        peaks.retain(|&p| prominence(s, p) >= thr);
+        let mut k = 0;
+        while k < peaks.len() {
+            let (lo, hi) = extent(&peaks, k);
+            let p = peaks[k];
+            let base = s[argmin(s, lo, p)].max(s[argmin(s, p, hi)]).max(0.0);
+            let level = 0.5 * (s[p] + base);
+            if width_at(s, p, lo, hi, level) < det.min_width_bins {
+                peaks.remove(k);
+            } else {
+                k += 1;
+            }
+        }
+        peaks.truncate(det.config.max_returns);
+        // The one-pass selection must also leave the valleys of these peaks.
+        peaks
+    }
+
+    #[test]
+    fn one_pass_selection_matches_the_definition() {
+        // Clusters of returns (close enough to merge or to leave narrow
+        // shoulders), noise from none to strong, with and without an
+        // atmosphere, short and long return limits, and plateaus from
+        // clipped samples.
+        let mut rng = Stream::new(7, 0, 0, Purpose::Test);
+        let mut scratch = DetectScratch::default();
+        let mut multi = 0;
+        for case in 0..3000 {
+            let noise = [0.0, 0.002, 0.01, 0.03][case % 4];
+            let rx = Receiver::new(ReceiverConfig {
+                bin_s: 500e-12,
+                pulse: if case % 3 == 0 {
+                    PulseShape::RiseTail { fwhm_s: 3e-9 }
+                } else {
+                    PulseShape::Gaussian { fwhm_s: 4e-9 }
+                },
+                noise_sigma: noise,
+                atmosphere: if case % 5 == 0 { 0.02 } else { 0.0 },
+                reference_range_m: 1000.0,
+            });
+            let det = Detector::new(
+                DetectorConfig {
+                    threshold_sigma: 4.0,
+                    min_amplitude: 0.005,
+                    max_returns: 1 + case % 6,
+                },
+                &rx,
+            );
+            let returns: Vec<Return> = (0..1 + case % 7)
+                .map(|_| Return {
+                    range_m: 500.0 + 4.0 * rng.uniform(),
+                    power: 0.3 * rng.uniform(),
+                })
+                .collect();
+            let mut wf = Waveform::default();
+            rx.synthesize(&returns, &mut rng, &mut wf);
+            if case % 11 == 0 {
+                let top = 0.05;
+                for v in &mut wf.samples {
+                    *v = v.min(top);
+                }
+            }
+            let s: Vec<f64> = wf
+                .samples
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v - wf.background_at(i))
+                .collect();
+            let want = select_by_definition(&det, &s);
+            let mut out = Vec::new();
+            det.detect(&wf, &mut scratch, &mut out);
+            assert_eq!(scratch.peaks, want, "case {case}");
+            let valleys: Vec<usize> = want.windows(2).map(|w| argmin(&s, w[0], w[1])).collect();
+            assert_eq!(scratch.valleys, valleys, "case {case}");
+            multi += usize::from(want.len() > 1);
+        }
+        // The cases must exercise merging, not only single echoes.
+        assert!(multi > 300, "{multi}");
+        // Arbitrary sequences: many maxima of every width and height, narrow
+        // ones dropped next to each other and at both ends.
+        let (_, det) = setup(PulseShape::Gaussian { fwhm_s: 4e-9 }, 0.01);
+        let (mut peaks, mut valleys) = (Vec::new(), Vec::new());
+        for case in 0..20_000 {
+            let n = 3 + case % 60;
+            let mut level: f64 = 0.0;
+            let s: Vec<f64> = (0..n)
+                .map(|_| {
+                    level = (level + 0.08 * (rng.uniform() - 0.5)).max(0.0);
+                    level + if rng.uniform() < 0.1 { 0.1 } else { 0.0 }
+                })
+                .collect();
+            det.select(&s, &mut peaks, &mut valleys);
+            let want = select_by_definition(&det, &s);
+            let want_valleys: Vec<usize> =
+                want.windows(2).map(|w| argmin(&s, w[0], w[1])).collect();
+            assert_eq!((&peaks, &valleys), (&want, &want_valleys), "{s:?}");
+        }
+    }
+
     fn setup(pulse: PulseShape, noise: f64) -> (Receiver, Detector) {
         let rx = Receiver::new(ReceiverConfig {
             bin_s: 500e-12,
@@ -422,7 +588,7 @@ mod tests {
         let mut wf = Waveform::default();
         rx.synthesize(returns, &mut rng, &mut wf);
         let mut out = Vec::new();
-        det.detect(&wf, &mut Vec::new(), &mut Vec::new(), &mut out);
+        det.detect(&wf, &mut DetectScratch::default(), &mut out);
         out
     }
 
@@ -513,7 +679,7 @@ mod tests {
             .unwrap();
         wf.samples[peak + 8] += 0.2;
         let mut out = Vec::new();
-        det.detect(&wf, &mut Vec::new(), &mut Vec::new(), &mut out);
+        det.detect(&wf, &mut DetectScratch::default(), &mut out);
         assert_eq!(out.len(), 1, "{out:?}");
     }
 

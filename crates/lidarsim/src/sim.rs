@@ -17,7 +17,7 @@ use std::time::Instant;
 
 use crate::accel::{PulseTrace, RayCaster, VolumeSpan};
 use crate::canopy::{CanopyConfig, Fate, march};
-use crate::detection::{Detector, Echo};
+use crate::detection::{DetectScratch, Detector, Echo};
 use crate::geometry::{DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
 use crate::navigation::observed_pose;
 use crate::output::{PointRecord, PointSink, WaveformBlock, WaveformPacket};
@@ -80,8 +80,7 @@ pub struct Scratch {
     /// foliage).
     return_normals: Vec<DVec3>,
     waveform: Waveform,
-    signal: Vec<f64>,
-    peaks: Vec<usize>,
+    detect: DetectScratch,
     echoes: Vec<Echo>,
     /// Energy per primitive within one echo.
     energy_by_prim: Vec<(u32, f64)>,
@@ -283,12 +282,8 @@ impl<'a> Simulator<'a> {
         let mut noise_rng = Stream::new(s.seed, line.index, k, Purpose::ReceiverNoise);
         self.receiver
             .synthesize(&scratch.returns, &mut noise_rng, &mut scratch.waveform);
-        self.detector.detect(
-            &scratch.waveform,
-            &mut scratch.signal,
-            &mut scratch.peaks,
-            &mut scratch.echoes,
-        );
+        self.detector
+            .detect(&scratch.waveform, &mut scratch.detect, &mut scratch.echoes);
         let n = scratch.echoes.len();
         if n == 0 {
             return 0;
