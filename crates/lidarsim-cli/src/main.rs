@@ -16,6 +16,8 @@ use lidarsim::accel::Bvh;
 use lidarsim::plan::plan;
 use lidarsim::run::{RunOptions, Summary, run_survey_to_dir};
 
+mod cpu;
+
 /// Prints a line to standard error, ignoring a closed pipe (`2>&1 | head`).
 macro_rules! note {
     ($($arg:tt)*) => {{
@@ -146,6 +148,11 @@ static STOP: AtomicBool = AtomicBool::new(false);
 const INTERRUPTED: u8 = 130;
 
 fn main() -> ExitCode {
+    // Before anything built for x86-64-v3 runs (see cpu.rs).
+    if let Some(feature) = cpu::missing() {
+        cpu::refuse(feature);
+        return ExitCode::from(1);
+    }
     let cli = Cli::parse();
     // A second signal while the files are being finished ends the program
     // at once (leaving only `.partial` files behind).
