@@ -602,9 +602,8 @@ impl RayCaster for Bvh {
                 }
             } else {
                 let l = n.left_or_first as usize;
-                let tl = bundle.enters(&self.nodes[l], slack(far));
-                let tr = bundle.enters(&self.nodes[l + 1], slack(far));
-                match (tl, tr) {
+                let pair = <&[Node; 2]>::try_from(&self.nodes[l..l + 2]).expect("two children");
+                match bundle.enters_pair(pair, slack(far)) {
                     (Some(a), Some(b)) => {
                         let (near, farther) = if a <= b { (l, l + 1) } else { (l + 1, l) };
                         if sp < STACK {
@@ -814,6 +813,20 @@ impl Bundle {
         }
     }
 
+    /// [`Bundle::enters`] for two sibling nodes (adjacent in the array),
+    /// with AVX both at once.
+    #[inline]
+    fn enters_pair(&self, pair: &[Node; 2], t_max: f32) -> (Option<f32>, Option<f32>) {
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+        {
+            self.simd.enters_pair(pair, t_max)
+        }
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+        {
+            (self.enters(&pair[0], t_max), self.enters(&pair[1], t_max))
+        }
+    }
+
     /// [`Bundle::enters`] one axis at a time (the definition; the SSE form
     /// computes the same products and so the same answer).
     #[inline]
@@ -944,6 +957,65 @@ mod sse {
                 (t0 <= t1).then_some(t0)
             }
         }
+
+        /// [`BundleLanes::enters`] for two adjacent nodes, one in each
+        /// 128-bit half of AVX registers: the same products, minima and
+        /// maxima, so the same answers.
+        #[cfg(target_feature = "avx")]
+        #[inline(always)]
+        pub(super) fn enters_pair(
+            &self,
+            pair: &[Node; 2],
+            t_max: f32,
+        ) -> (Option<f32>, Option<f32>) {
+            let p = pair.as_ptr() as *const f32;
+            // SAFETY: the build enables AVX (checked by the `cfg`); the two
+            // `repr(C)` nodes are 64 contiguous bytes, read as two 32-byte
+            // halves: each is `min`, a `u32`, `max`, a `u32`, and the mask
+            // clears the `u32` lanes.
+            unsafe {
+                let both = |v: __m128| _mm256_set_m128(v, v);
+                let first = _mm256_loadu_ps(p);
+                let second = _mm256_loadu_ps(p.add(8));
+                let xyz = both(self.xyz);
+                let min = _mm256_and_ps(_mm256_permute2f128_ps::<0x20>(first, second), xyz);
+                let max = _mm256_and_ps(_mm256_permute2f128_ps::<0x31>(first, second), xyz);
+                let o = both(self.o);
+                let below = _mm256_mul_ps(_mm256_sub_ps(min, o), both(self.inv_hi));
+                let above = _mm256_mul_ps(_mm256_sub_ps(max, o), both(self.inv_lo));
+                let ninf = _mm256_set1_ps(f32::NEG_INFINITY);
+                let pinf = _mm256_set1_ps(f32::INFINITY);
+                let pick = |m: __m128, a: __m256, b: __m256| {
+                    let m = both(m);
+                    _mm256_or_ps(_mm256_and_ps(m, a), _mm256_andnot_ps(m, b))
+                };
+                let t0 = _mm256_max_ps(
+                    pick(self.entry_below, below, ninf),
+                    pick(self.entry_above, above, ninf),
+                );
+                let t1 = _mm256_min_ps(
+                    pick(self.exit_above, above, pinf),
+                    pick(self.exit_below, below, pinf),
+                );
+                // Within each half: lanes 2–3 onto 0–1, then lane 1 onto 0.
+                let t0 = _mm256_max_ps(t0, _mm256_shuffle_ps::<0b1110>(t0, t0));
+                let t0 = _mm256_max_ps(t0, _mm256_shuffle_ps::<0b01>(t0, t0));
+                let t1 = _mm256_min_ps(t1, _mm256_shuffle_ps::<0b1110>(t1, t1));
+                let t1 = _mm256_min_ps(t1, _mm256_shuffle_ps::<0b01>(t1, t1));
+                let answer = |t0: __m128, t1: __m128| {
+                    let t0 = _mm_cvtss_f32(t0);
+                    let t1 = _mm_cvtss_f32(t1).min(t_max);
+                    (t0 <= t1).then_some(t0)
+                };
+                (
+                    answer(_mm256_castps256_ps128(t0), _mm256_castps256_ps128(t1)),
+                    answer(
+                        _mm256_extractf128_ps::<1>(t0),
+                        _mm256_extractf128_ps::<1>(t1),
+                    ),
+                )
+            }
+        }
     }
 }
 
@@ -1070,6 +1142,22 @@ mod tests {
             let t_max = [1e3f32, 60.0][case % 2];
             let want = bundle.enters_scalar(&node, t_max);
             assert_eq!(bundle.enters(&node, t_max), want, "case {case}");
+            // The pair test answers for both nodes in either order.
+            let other = Node {
+                min: [a.x as f32 - 5.0, a.y as f32, a.z as f32 + 3.0],
+                left_or_first: 0,
+                max: [b.x as f32, b.y as f32 + 4.0, b.z as f32 + 3.0],
+                count: 0,
+            };
+            let want_other = bundle.enters_scalar(&other, t_max);
+            assert_eq!(
+                bundle.enters_pair(&[node, other], t_max),
+                (want, want_other)
+            );
+            assert_eq!(
+                bundle.enters_pair(&[other, node], t_max),
+                (want_other, want)
+            );
             if want.is_some() {
                 entered += 1;
             } else {
