@@ -328,12 +328,18 @@ impl RunFigures {
     }
 }
 
-/// 64-bit FNV-1a of a file's bytes.
+/// 64-bit FNV-1a hash of a LAS file without its creation day and year (header
+/// bytes 90–93, LAS 1.4 R15 Table 3), so that runs on different days
+/// compare.
 fn fnv1a(path: &Path) -> io::Result<u64> {
     let bytes = std::fs::read(path)?;
-    Ok(bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    }))
+    Ok(bytes
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !(90..94).contains(i))
+        .fold(0xcbf2_9ce4_8422_2325u64, |h, (_, &b)| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        }))
 }
 
 /// Loads `survey_path` (timed), then runs it once per entry of `threads`,
