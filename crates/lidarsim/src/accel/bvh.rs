@@ -11,7 +11,9 @@ use super::{
     Hit, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, oriented_hit, volume_span,
 };
 use crate::geometry::{Aabb, DVec3, Ray};
-use crate::scene::{Coverage, Primitive, Scene, Shape, Triangle, TriangleFan, bundle_spread};
+use crate::scene::{
+    Coverage, EdgeTest, Primitive, Scene, Shape, Triangle, TriangleFan, bundle_spread,
+};
 
 const MAX_LEAF: usize = 4;
 const BINS: usize = 16;
@@ -696,7 +698,8 @@ impl RayCaster for Bvh {
 /// updating `best` (distance, primitive, normal) where the triangle is closer;
 /// returns how many rays got their first hit. `cone` is the bundle's axis
 /// and spread ([`bundle_spread`]): a triangle the whole bundle misses costs
-/// only its edge planes, and one it covers skips the per-ray edge tests.
+/// only its edge planes, one it covers skips the per-ray edge tests, and
+/// for one it straddles each ray is tested on the straddled edges only.
 #[inline]
 fn bundle_triangle(
     tri: &Triangle,
@@ -709,18 +712,41 @@ fn bundle_triangle(
 ) -> usize {
     let mut fan = TriangleFan::edges(tri, origin);
     let coverage = fan.coverage(cone.0, cone.1);
-    if coverage == Coverage::None {
-        return 0;
-    }
+    let straddle = match coverage {
+        Coverage::None => return 0,
+        Coverage::All => None,
+        Coverage::Some(straddle) => Some(straddle),
+    };
     fan.complete(tri);
+    // One loop per kind of test, so that each runs without deciding again.
+    let f = &fan;
+    match straddle.map(|s| fan.edge_test(s)) {
+        None => record_hits(f, p, dirs, t_min, best, &|_| true),
+        Some(EdgeTest::One(a)) => record_hits(f, p, dirs, t_min, best, &|d| d.dot(a) >= 0.0),
+        Some(EdgeTest::Two(a, b)) => record_hits(f, p, dirs, t_min, best, &|d| {
+            d.dot(a) >= 0.0 && d.dot(b) >= 0.0
+        }),
+        Some(EdgeTest::Three) => record_hits(f, p, dirs, t_min, best, &|d| f.passes(d)),
+    }
+}
+
+/// Records `fan`'s triangle `p` for every ray that `passes` and meets it
+/// closer than its best so far; returns how many rays got their first hit.
+#[inline(always)]
+fn record_hits(
+    fan: &TriangleFan,
+    p: u32,
+    dirs: &[DVec3],
+    t_min: f64,
+    best: &mut [(f64, u32, DVec3)],
+    passes: &impl Fn(DVec3) -> bool,
+) -> usize {
     let mut first = 0;
     for (d, slot) in dirs.iter().zip(best.iter_mut()) {
-        let t = if coverage == Coverage::All {
-            fan.distance(*d, t_min, slot.0)
-        } else {
-            fan.intersect(*d, t_min, slot.0)
-        };
-        if let Some(t) = t {
+        if !passes(*d) {
+            continue;
+        }
+        if let Some(t) = fan.distance(*d, t_min, slot.0) {
             first += usize::from(slot.1 == u32::MAX);
             *slot = (t, p, fan.normal());
         }

@@ -210,8 +210,36 @@ pub enum Coverage {
     None,
     /// All of them pass the edge tests; only the distance remains to check.
     All,
-    /// Undecided: test them one by one.
-    Some,
+    /// Undecided: test them one by one ([`TriangleFan::edge_test`] says on
+    /// which edges).
+    Some(Straddle),
+}
+
+/// Which edges of a triangle a bundle straddles ([`Coverage::Some`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Straddle {
+    /// Bit `i` set: the rays' triple products on edge `i` (`ab`, `bc`, `ca`)
+    /// may have either sign.
+    uncertain: u8,
+    /// The sign (true: positive) every ray has on the other edges; unused
+    /// when all three are uncertain.
+    positive: bool,
+}
+
+/// The per-ray part of the edge test for the rays of a bundle that
+/// straddles a triangle ([`TriangleFan::edge_test`]). An edge certain of its
+/// sign is certain of it strictly (never zero), so a ray passes exactly when
+/// its products on the uncertain edges have that sign or are zero. Each
+/// uncertain edge is turned (negated, which is exact) so that passing means
+/// `d·e ≥ 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum EdgeTest {
+    /// One uncertain edge.
+    One(DVec3),
+    /// Two uncertain edges.
+    Two(DVec3, DVec3),
+    /// All three uncertain: the full test of [`TriangleFan::intersect`].
+    Three,
 }
 
 impl TriangleFan {
@@ -260,7 +288,8 @@ impl TriangleFan {
     pub fn coverage(&self, axis: DVec3, spread: f64) -> Coverage {
         let s2 = spread * spread;
         let (mut pos, mut neg) = (0, 0);
-        for e in [self.nab, self.nbc, self.nca] {
+        let mut uncertain = 0u8;
+        for (i, e) in [self.nab, self.nbc, self.nca].into_iter().enumerate() {
             let w = axis.dot(e);
             if w * w > s2 * e.length_squared() {
                 if w > 0.0 {
@@ -268,6 +297,8 @@ impl TriangleFan {
                 } else {
                     neg += 1;
                 }
+            } else {
+                uncertain |= 1 << i;
             }
         }
         if pos > 0 && neg > 0 {
@@ -275,7 +306,28 @@ impl TriangleFan {
         } else if pos == 3 || neg == 3 {
             Coverage::All
         } else {
-            Coverage::Some
+            Coverage::Some(Straddle {
+                uncertain,
+                positive: pos > 0,
+            })
+        }
+    }
+
+    /// The edge tests left for each ray of a bundle with coverage
+    /// `Some(straddle)`: only the uncertain edges, turned so that a ray
+    /// passes when `d·e ≥ 0` ([`EdgeTest`]).
+    #[inline]
+    pub fn edge_test(&self, straddle: Straddle) -> EdgeTest {
+        let turn = |e: DVec3| if straddle.positive { e } else { -e };
+        let [ab, bc, ca] = [self.nab, self.nbc, self.nca].map(turn);
+        match straddle.uncertain {
+            0b001 => EdgeTest::One(ab),
+            0b010 => EdgeTest::One(bc),
+            0b100 => EdgeTest::One(ca),
+            0b011 => EdgeTest::Two(ab, bc),
+            0b101 => EdgeTest::Two(ab, ca),
+            0b110 => EdgeTest::Two(bc, ca),
+            _ => EdgeTest::Three,
         }
     }
 
@@ -290,12 +342,18 @@ impl TriangleFan {
     /// `(t_min, t_max)`.
     #[inline]
     pub fn intersect(&self, d: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
-        let (w0, w1, w2) = (d.dot(self.nab), d.dot(self.nbc), d.dot(self.nca));
-        let inside = (w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0) | (w0 <= 0.0 && w1 <= 0.0 && w2 <= 0.0);
-        if !inside {
+        if !self.passes(d) {
             return None;
         }
         self.distance(d, t_min, t_max)
+    }
+
+    /// Whether the unit direction `d` passes the three edge tests (its
+    /// triple products share their sign, zero included).
+    #[inline]
+    pub fn passes(&self, d: DVec3) -> bool {
+        let (w0, w1, w2) = (d.dot(self.nab), d.dot(self.nbc), d.dot(self.nca));
+        (w0 >= 0.0 && w1 >= 0.0 && w2 >= 0.0) | (w0 <= 0.0 && w1 <= 0.0 && w2 <= 0.0)
     }
 
     /// [`TriangleFan::intersect`] for a direction known to pass the edge
@@ -619,7 +677,20 @@ mod tests {
                         assert_eq!(fan.distance(*d, 0.0, 1e9), fan.intersect(*d, 0.0, 1e9));
                     }
                 }
-                Coverage::Some => seen[2] += 1,
+                Coverage::Some(straddle) => {
+                    seen[2] += 1;
+                    // The per-ray tests on the uncertain edges alone decide
+                    // as the full test does.
+                    let test = fan.edge_test(straddle);
+                    for d in &dirs {
+                        let short = match test {
+                            EdgeTest::One(e) => d.dot(e) >= 0.0,
+                            EdgeTest::Two(e, f) => d.dot(e) >= 0.0 && d.dot(f) >= 0.0,
+                            EdgeTest::Three => passes(*d),
+                        };
+                        assert_eq!(short, passes(*d), "case {case}");
+                    }
+                }
             }
         }
         assert!(seen.iter().all(|&n| n > 500), "{seen:?}");
