@@ -129,6 +129,7 @@ impl Detector {
             signal,
             peaks,
             valleys,
+            widths,
         } = scratch;
         signal.clear();
         // Without atmosphere the background is zero and the samples are the
@@ -143,7 +144,7 @@ impl Detector {
             peaks.clear();
             return;
         }
-        self.select(s, peaks, valleys);
+        self.select(s, peaks, valleys, widths);
         let n = s.len();
         for (k, &p) in peaks.iter().enumerate() {
             // The bins attributed to the peak: down to the lowest points
@@ -155,7 +156,12 @@ impl Detector {
                 n - 1
             };
             let (offset, peak_amplitude) = refine(s, p, self.fit_half, lo, hi);
-            let width = half_max_width(s, p, lo, hi);
+            // The selection measured this width already when the peak's
+            // base was zero and its bounds are still the same.
+            let width = match widths.get(k) {
+                Some(&(a, b, w)) if a == lo && b == hi && !w.is_nan() => w,
+                _ => half_max_width(s, p, lo, hi),
+            };
             let amplitude = energy(s, p, width, lo, hi) / self.unit_energy;
             let fitted = (wf.first_bin + p as i64) as f64 + offset;
             let bin = fitted - self.bias_at(fitted);
@@ -175,15 +181,25 @@ impl Detector {
     /// The maxima of `s` (at least 3 samples) that are echoes, first in
     /// time first, up to `max_returns`, into `peaks`; `valleys[k]` is the
     /// first lowest sample between `peaks[k]` and `peaks[k + 1]`.
+    /// `widths[k]` is `(lo, hi, w)`: the bounds within which peak `k`'s
+    /// width was measured and, when its base was zero (so that the level
+    /// was half its maximum), that width, else NaN.
     ///
     /// This is `select_by_definition` of the tests (the rules in the order the module
     /// documentation gives them) in one scan per rule: the lowest points
     /// between neighbouring peaks are found once, and when a peak is dropped
     /// the two valleys around it merge into the lower one (the earlier of
     /// equals, as a scan would find it) instead of being searched again.
-    fn select(&self, s: &[f64], peaks: &mut Vec<usize>, valleys: &mut Vec<usize>) {
+    fn select(
+        &self,
+        s: &[f64],
+        peaks: &mut Vec<usize>,
+        valleys: &mut Vec<usize>,
+        widths: &mut Vec<(usize, usize, f64)>,
+    ) {
         peaks.clear();
         valleys.clear();
+        widths.clear();
         let n = s.len();
         let thr = self.threshold;
         // Candidate maxima above the threshold that stand out by the
@@ -226,7 +242,11 @@ impl Detector {
             };
             let base = left_min.max(right_min).max(0.0);
             let level = 0.5 * (s[p] + base);
-            if width_at(s, p, lo, hi, level) >= self.min_width_bins {
+            let width = width_at(s, p, lo, hi, level);
+            if width >= self.min_width_bins {
+                // With a zero base the level is exactly half the maximum:
+                // the echo's width, if its bounds stay the same.
+                widths.push((lo, hi, if base == 0.0 { width } else { f64::NAN }));
                 k += 1;
                 continue;
             }
@@ -243,6 +263,7 @@ impl Detector {
         }
         peaks.truncate(self.config.max_returns);
         valleys.truncate(peaks.len().saturating_sub(1));
+        widths.truncate(peaks.len());
     }
 }
 
@@ -255,6 +276,8 @@ pub struct DetectScratch {
     peaks: Vec<usize>,
     /// Lowest samples between neighbouring echoes.
     valleys: Vec<usize>,
+    /// Widths measured by the selection, with their bounds.
+    widths: Vec<(usize, usize, f64)>,
 }
 
 /// Calibrates the peak fit on the emitted pulse: for 256 sub-bin phases of
@@ -492,6 +515,7 @@ mod tests {
         let mut rng = Stream::new(7, 0, 0, Purpose::Test);
         let mut scratch = DetectScratch::default();
         let mut multi = 0;
+        let mut reused = 0;
         for case in 0..3000 {
             let noise = [0.0, 0.002, 0.01, 0.03][case % 4];
             let rx = Receiver::new(ReceiverConfig {
@@ -539,14 +563,23 @@ mod tests {
             assert_eq!(scratch.peaks, want, "case {case}");
             let valleys: Vec<usize> = want.windows(2).map(|w| argmin(&s, w[0], w[1])).collect();
             assert_eq!(scratch.valleys, valleys, "case {case}");
+            // Every width the selection kept for reuse is the half-maximum
+            // width within the same bounds.
+            for (&p, &(lo, hi, w)) in scratch.peaks.iter().zip(&scratch.widths) {
+                if !w.is_nan() {
+                    reused += 1;
+                    assert_eq!(w, half_max_width(&s, p, lo, hi), "case {case}");
+                }
+            }
             multi += usize::from(want.len() > 1);
         }
         // The cases must exercise merging, not only single echoes.
         assert!(multi > 300, "{multi}");
+        assert!(reused > 1000, "{reused}");
         // Arbitrary sequences: many maxima of every width and height, narrow
         // ones dropped next to each other and at both ends.
         let (_, det) = setup(PulseShape::Gaussian { fwhm_s: 4e-9 }, 0.01);
-        let (mut peaks, mut valleys) = (Vec::new(), Vec::new());
+        let (mut peaks, mut valleys, mut widths) = (Vec::new(), Vec::new(), Vec::new());
         for case in 0..20_000 {
             let n = 3 + case % 60;
             let mut level: f64 = 0.0;
@@ -556,7 +589,7 @@ mod tests {
                     level + if rng.uniform() < 0.1 { 0.1 } else { 0.0 }
                 })
                 .collect();
-            det.select(&s, &mut peaks, &mut valleys);
+            det.select(&s, &mut peaks, &mut valleys, &mut widths);
             let want = select_by_definition(&det, &s);
             let want_valleys: Vec<usize> =
                 want.windows(2).map(|w| argmin(&s, w[0], w[1])).collect();
