@@ -7,9 +7,7 @@
 //! `f64` primitives: a box test may let through a primitive that the exact
 //! `f64` test then rejects, never the reverse.
 
-use super::{
-    Hit, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, oriented_hit, volume_span,
-};
+use super::{Hit, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
 use crate::geometry::{Aabb, DVec3, Ray};
 use crate::scene::{
     Coverage, EdgeTest, Primitive, Scene, Shape, Triangle, TriangleFan, bundle_spread,
@@ -639,32 +637,35 @@ impl RayCaster for Bvh {
                 }
             }
         }
-        // Triangle hits carry their normal from the test; other sub-rays
-        // mostly hit the same flat primitive, whose normal is computed once.
+        // Triangle hits carry their normal, already facing the ray, from the
+        // test; other sub-rays mostly hit the same flat primitive, whose
+        // normal is computed once.
         let mut flat: Option<(u32, DVec3)> = None;
         if volumes.is_empty() {
-            for (dir, &(t, p, normal)) in dirs.iter().zip(best.iter()) {
-                let hit = (p != u32::MAX).then(|| {
-                    let n = match flat {
-                        _ if !normal.x.is_nan() => normal,
-                        Some((q, n)) if q == p => n,
-                        _ => {
-                            let prim = &self.scene.primitives[p as usize];
-                            let n = prim.normal_at(origin + *dir * t);
-                            if prim.is_flat() {
-                                flat = Some((p, n));
-                            }
-                            n
+            out.hits
+                .extend(dirs.iter().zip(best.iter()).map(|(dir, &(t, p, normal))| {
+                    (p != u32::MAX).then(|| {
+                        if !normal.x.is_nan() {
+                            return Hit { t, prim: p, normal };
                         }
-                    };
-                    Hit {
-                        t,
-                        prim: p,
-                        normal: if n.dot(*dir) > 0.0 { -n } else { n },
-                    }
-                });
-                out.push_surface(hit);
-            }
+                        let n = match flat {
+                            Some((q, n)) if q == p => n,
+                            _ => {
+                                let prim = &self.scene.primitives[p as usize];
+                                let n = prim.normal_at(origin + *dir * t);
+                                if prim.is_flat() {
+                                    flat = Some((p, n));
+                                }
+                                n
+                            }
+                        };
+                        Hit {
+                            t,
+                            prim: p,
+                            normal: if n.dot(*dir) > 0.0 { -n } else { n },
+                        }
+                    })
+                }));
             out.best = best;
             out.volumes = volumes;
             return;
@@ -683,7 +684,7 @@ impl RayCaster for Bvh {
                 if normal.x.is_nan() {
                     make_hit(&self.scene, p, &ray, t)
                 } else {
-                    oriented_hit(p, &ray, t, normal)
+                    Hit { t, prim: p, normal }
                 }
             });
             out.push(hit, spans);
@@ -746,9 +747,9 @@ fn record_hits(
         if !passes(*d) {
             continue;
         }
-        if let Some(t) = fan.distance(*d, t_min, slot.0) {
+        if let Some((t, normal)) = fan.hit(*d, t_min, slot.0) {
             first += usize::from(slot.1 == u32::MAX);
-            *slot = (t, p, fan.normal());
+            *slot = (t, p, normal);
         }
     }
     first

@@ -48,7 +48,8 @@ pub struct PulseTrace {
     spans: Vec<VolumeSpan>,
     ranges: Vec<(u32, u32)>,
     /// Working storage of bundle traversals: closest distance, primitive
-    /// and (for triangles; NaN otherwise) unit normal of each sub-ray so far.
+    /// and (for triangles; NaN otherwise) unit normal facing the ray, of
+    /// each sub-ray so far.
     pub(crate) best: Vec<(f64, u32, DVec3)>,
     /// Working storage of bundle traversals: volumes met by the bundle.
     pub(crate) volumes: Vec<u32>,
@@ -68,14 +69,6 @@ impl PulseTrace {
         let start = self.spans.len() as u32;
         self.spans.extend_from_slice(spans);
         self.ranges.push((start, self.spans.len() as u32));
-        self.hits.push(hit);
-    }
-
-    /// Records the result of the next sub-ray of a pulse none of whose
-    /// sub-rays passes a volume (a pulse is recorded either with this or
-    /// with [`PulseTrace::push`]).
-    #[inline]
-    pub fn push_surface(&mut self, hit: Option<Hit>) {
         self.hits.push(hit);
     }
 
@@ -148,21 +141,11 @@ pub trait RayCaster: Send + Sync {
     }
 }
 
-/// Builds the hit record for primitive `prim` at distance `t`.
+/// Builds the hit record for primitive `prim` at distance `t`, with the
+/// surface normal turned towards the ray origin.
 #[inline]
 pub(crate) fn make_hit(scene: &Scene, prim: u32, ray: &Ray, t: f64) -> Hit {
-    oriented_hit(
-        prim,
-        ray,
-        t,
-        scene.primitives[prim as usize].normal_at(ray.at(t)),
-    )
-}
-
-/// The hit record with the surface normal `n` turned towards the ray
-/// origin.
-#[inline]
-pub(crate) fn oriented_hit(prim: u32, ray: &Ray, t: f64, n: DVec3) -> Hit {
+    let n = scene.primitives[prim as usize].normal_at(ray.at(t));
     let normal = if n.dot(ray.dir) > 0.0 { -n } else { n };
     Hit { t, prim, normal }
 }

@@ -345,7 +345,7 @@ impl TriangleFan {
         if !self.passes(d) {
             return None;
         }
-        self.distance(d, t_min, t_max)
+        self.hit(d, t_min, t_max).map(|(t, _)| t)
     }
 
     /// Whether the unit direction `d` passes the three edge tests (its
@@ -357,11 +357,15 @@ impl TriangleFan {
     }
 
     /// [`TriangleFan::intersect`] for a direction known to pass the edge
-    /// tests ([`Coverage::All`]): the same distance, to the bit.
+    /// tests ([`Coverage::All`]): the same distance, to the bit, and the
+    /// unit normal turned to face the ray (negated where `n·d > 0`, the
+    /// rule of [`crate::accel::Hit::normal`], from the same `n·d` that gives
+    /// the distance).
     #[inline]
-    pub fn distance(&self, d: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
-        let t = self.num / self.n.dot(d);
-        (t > t_min && t < t_max).then_some(t)
+    pub fn hit(&self, d: DVec3, t_min: f64, t_max: f64) -> Option<(f64, DVec3)> {
+        let nd = self.n.dot(d);
+        let t = self.num / nd;
+        (t > t_min && t < t_max).then(|| (t, if nd > 0.0 { -self.n } else { self.n }))
     }
 }
 
@@ -674,7 +678,12 @@ mod tests {
                     seen[1] += 1;
                     assert!(dirs.iter().all(|d| passes(*d)), "case {case}");
                     for d in &dirs {
-                        assert_eq!(fan.distance(*d, 0.0, 1e9), fan.intersect(*d, 0.0, 1e9));
+                        let hit = fan.hit(*d, 0.0, 1e9);
+                        assert_eq!(hit.map(|h| h.0), fan.intersect(*d, 0.0, 1e9));
+                        // The normal faces the ray: n·d ≤ 0.
+                        let n = tri.normal();
+                        let facing = if n.dot(*d) > 0.0 { -n } else { n };
+                        assert!(hit.is_none_or(|h| h.1 == facing), "case {case}");
                     }
                 }
                 Coverage::Some(straddle) => {
