@@ -74,11 +74,9 @@ pub struct Scratch {
     trace: PulseTrace,
     spans: Vec<VolumeSpan>,
     returns: Vec<Return>,
-    /// Primitive of each return (parallel to `returns`).
-    return_prims: Vec<u32>,
-    /// Surface normal at each return (parallel to `returns`; NaN for
-    /// foliage).
-    return_normals: Vec<DVec3>,
+    /// Primitive of each return and the surface normal there (NaN for
+    /// foliage), parallel to `returns`.
+    return_surfaces: Vec<(u32, DVec3)>,
     waveform: Waveform,
     detect: DetectScratch,
     echoes: Vec<Echo>,
@@ -223,8 +221,7 @@ impl<'a> Simulator<'a> {
         let mut speckle_rng: Option<Stream> = None;
         let mut canopy_rng: Option<Stream> = None;
         scratch.returns.clear();
-        scratch.return_prims.clear();
-        scratch.return_normals.clear();
+        scratch.return_surfaces.clear();
         for (i, (dir, share)) in scratch.dirs.iter().zip(self.pattern.weights()).enumerate() {
             let spans = scratch.trace.spans_of(i);
             let fate = if spans.is_empty() {
@@ -270,8 +267,7 @@ impl<'a> Simulator<'a> {
                 power *= sp.factor(speckle_rng.get_or_insert_with(|| stream(Purpose::Speckle)));
             }
             scratch.returns.push(Return { range_m, power });
-            scratch.return_prims.push(prim);
-            scratch.return_normals.push(normal);
+            scratch.return_surfaces.push((prim, normal));
         }
         if scratch.returns.is_empty() {
             scratch.waveform.samples.clear();
@@ -351,7 +347,12 @@ impl<'a> Simulator<'a> {
             let hi = echo.last_bin as f64 + 1.0;
             scratch.energy_by_prim.clear();
             let bins = &scratch.waveform.return_bins;
-            for ((r, &p), &b) in scratch.returns.iter().zip(&scratch.return_prims).zip(bins) {
+            for ((r, &(p, _)), &b) in scratch
+                .returns
+                .iter()
+                .zip(&scratch.return_surfaces)
+                .zip(bins)
+            {
                 if b < lo || b >= hi {
                     continue;
                 }
@@ -371,11 +372,10 @@ impl<'a> Simulator<'a> {
                     // the first of its sub-rays in the echo met it.
                     incidence_angle_deg = bins
                         .iter()
-                        .zip(&scratch.return_prims)
-                        .zip(&scratch.return_normals)
-                        .find(|((b, q), _)| **q == p && **b >= lo && **b < hi)
-                        .filter(|(_, n)| n.is_finite())
-                        .map(|(_, n)| central.dot(*n).abs().min(1.0).acos().to_degrees());
+                        .zip(&scratch.return_surfaces)
+                        .find(|(b, (q, _))| *q == p && **b >= lo && **b < hi)
+                        .filter(|(_, (_, n))| n.is_finite())
+                        .map(|(_, (_, n))| central.dot(*n).abs().min(1.0).acos().to_degrees());
                     let prim = &scene.primitives[p as usize];
                     let h = if prim.class == SurfaceClass::Vegetation {
                         self.height_above_ground(truth)
