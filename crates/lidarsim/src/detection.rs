@@ -206,19 +206,31 @@ impl Detector {
         // threshold: the higher of the two valleys separating a peak from
         // higher ground (or from the window edge) must lie at least the
         // threshold below it.
+        // The prominence scans of the first and of the last peak also give
+        // the lowest samples between them and the window's ends when they
+        // reach those ends.
+        let (mut first_left, mut last_right) = (None, None);
         for i in 1..n - 1 {
             let v = s[i];
-            if v > thr && v > s[i - 1] && v >= s[i + 1] && prominence(s, i) >= thr {
-                peaks.push(i);
+            if v > thr && v > s[i - 1] && v >= s[i + 1] {
+                let (height, left_min, right_min) = prominence(s, i);
+                if height >= thr {
+                    if peaks.is_empty() {
+                        first_left = left_min;
+                    }
+                    last_right = right_min;
+                    peaks.push(i);
+                }
             }
         }
         let Some(&first) = peaks.first() else {
             return;
         };
         valleys.extend(peaks.windows(2).map(|w| argmin(s, w[0], w[1])));
-        // The lowest samples between the window's ends and the outer peaks.
-        let mut left = argmin(s, 0, first);
-        let right = argmin(s, peaks[peaks.len() - 1], n - 1);
+        // The lowest samples between the window's ends and the outer peaks
+        // (only their values matter below).
+        let mut left = first_left.unwrap_or_else(|| s[argmin(s, 0, first)]);
+        let right = last_right.unwrap_or_else(|| s[argmin(s, peaks[peaks.len() - 1], n - 1)]);
         // The earlier of two valleys, `a` before `b`, unless `b` is lower.
         let lower = |a: usize, b: usize| if s[a] <= s[b] { a } else { b };
         // An echo cannot be much narrower than the emitted pulse: a maximum
@@ -231,12 +243,12 @@ impl Detector {
             let last = peaks.len() - 1;
             let p = peaks[k];
             let (lo, left_min) = if k == 0 {
-                (0, s[left])
+                (0, left)
             } else {
                 (valleys[k - 1], s[valleys[k - 1]])
             };
             let (hi, right_min) = if k == last {
-                (n - 1, s[right])
+                (n - 1, right)
             } else {
                 (valleys[k], s[valleys[k]])
             };
@@ -255,7 +267,10 @@ impl Detector {
             if k == last {
                 valleys.pop();
             } else if k == 0 {
-                left = lower(left, valleys.remove(0));
+                let v = s[valleys.remove(0)];
+                if v < left {
+                    left = v;
+                }
             } else {
                 valleys[k - 1] = lower(valleys[k - 1], valleys.remove(k));
             }
@@ -308,12 +323,16 @@ fn bias_table(receiver: &Receiver, fit_half: usize) -> Vec<(f64, f64)> {
     table
 }
 
-/// Topographic prominence of the maximum at `p`.
-fn prominence(s: &[f64], p: usize) -> f64 {
+/// Topographic prominence of the maximum at `p`, and the lowest sample
+/// in `s[..=p]` and in `s[p..]` when the search on that side reached the
+/// end of `s` (no higher sample lies on that side).
+fn prominence(s: &[f64], p: usize) -> (f64, Option<f64>, Option<f64>) {
     let h = s[p];
     let mut left_min = h;
+    let mut left_end = true;
     for i in (0..p).rev() {
         if s[i] > h {
+            left_end = false;
             break;
         }
         // A comparison rather than `f64::min`: the samples are finite.
@@ -322,15 +341,21 @@ fn prominence(s: &[f64], p: usize) -> f64 {
         }
     }
     let mut right_min = h;
+    let mut right_end = true;
     for &v in &s[p + 1..] {
         if v > h {
+            right_end = false;
             break;
         }
         if v < right_min {
             right_min = v;
         }
     }
-    h - left_min.max(right_min)
+    (
+        h - left_min.max(right_min),
+        left_end.then_some(left_min),
+        right_end.then_some(right_min),
+    )
 }
 
 /// Index of the smallest sample in `a..=b` (the first of equals). Samples
@@ -488,7 +513,7 @@ mod tests {
             .filter(|(_, w)| w[1] > thr && w[1] > w[0] && w[1] >= w[2])
             .map(|(b, _)| b + 1)
             .collect();
-        peaks.retain(|&p| prominence(s, p) >= thr);
+        peaks.retain(|&p| prominence(s, p).0 >= thr);
         let mut k = 0;
         while k < peaks.len() {
             let (lo, hi) = extent(&peaks, k);
