@@ -392,11 +392,13 @@ fn refine(s: &[f64], p: usize, half: usize, lo: usize, hi: usize) -> (f64, f64) 
     let mut mom = [0.0f64; 5];
     let mut v = [0.0f64; 3];
     let mut used = 0;
-    for (j, &y) in s.iter().enumerate().take(b + 1).skip(a) {
+    // Small integers: stepping `x` by one is exact.
+    let mut x = a as f64 - p as f64 - 1.0;
+    for &y in s.get(a..=b).unwrap_or_default() {
+        x += 1.0;
         if y <= 0.0 {
             continue;
         }
-        let x = j as f64 - p as f64;
         let w = y * y;
         let wly = w * y.ln();
         let x2 = x * x;
