@@ -150,16 +150,30 @@ impl FlightLine {
         (-d.x).atan2(d.y)
     }
 
+    /// The constants of the line's poses, for [`FlightLine::pose_in`].
+    pub fn frame(&self) -> LineFrame {
+        LineFrame {
+            dir: (self.end_m - self.start_m) / self.length_m(),
+            heading_rad: self.heading_rad(),
+        }
+    }
+
     /// Pose at `t_s` seconds after the line start: position on the line,
     /// heading of the line, and the sway if any. The scanner is held level
     /// on a climbing or descending line (nominal roll and pitch zero).
     pub fn pose_at(&self, t_s: f64) -> Pose {
+        self.pose_in(&self.frame(), t_s)
+    }
+
+    /// [`FlightLine::pose_at`] with the line's [`FlightLine::frame`]
+    /// computed beforehand (the same pose, to the bit).
+    pub fn pose_in(&self, frame: &LineFrame, t_s: f64) -> Pose {
         if let Some(track) = &self.track {
             return track.pose_at(t_s);
         }
-        let dir = (self.end_m - self.start_m) / self.length_m();
+        let dir = frame.dir;
         let mut position_m = self.start_m + dir * (self.speed_mps * t_s);
-        let heading = self.heading_rad();
+        let heading = frame.heading_rad;
         if let Some(d) = &self.drift {
             let [lateral, vertical] = d.offsets_at(t_s);
             position_m += right_of(heading) * lateral + DVec3::Z * vertical;
@@ -174,6 +188,15 @@ impl FlightLine {
             },
         }
     }
+}
+
+/// The constants of a straight line's poses ([`FlightLine::frame`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LineFrame {
+    /// Unit direction from start to end.
+    dir: DVec3,
+    /// [`FlightLine::heading_rad`].
+    heading_rad: f64,
 }
 
 /// Slow drift of the aircraft off its planned line (turbulence): lateral

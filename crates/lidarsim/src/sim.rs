@@ -18,10 +18,10 @@ use std::time::Instant;
 use crate::accel::{PulseTrace, RayCaster, VolumeSpan};
 use crate::canopy::{CanopyConfig, Fate, march};
 use crate::detection::{DetectScratch, Detector, Echo};
-use crate::geometry::{DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
+use crate::geometry::{Attitude, DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
 use crate::navigation::observed_pose;
 use crate::output::{PointRecord, PointSink, WaveformBlock, WaveformPacket};
-use crate::platform::FlightLine;
+use crate::platform::{FlightLine, LineFrame};
 use crate::radiometry::{Speckle, surface_return};
 use crate::rng::{Purpose, Stream};
 use crate::scanner::{BeamPattern, Mirror};
@@ -82,6 +82,73 @@ pub struct Scratch {
     echoes: Vec<Echo>,
     /// Energy per primitive within one echo.
     energy_by_prim: Vec<(u32, f64)>,
+    frames: FrameCache,
+}
+
+/// The per-line and per-attitude constants of the last pulse, reused while
+/// they stay the same to the bit (so the values are those computed afresh):
+/// the line's direction and heading, and the rotations of its attitude.
+#[derive(Default)]
+struct FrameCache {
+    /// Line number and the bits of its start and end.
+    line: Option<([u64; 7], LineFrame)>,
+    /// Bits of roll, pitch, yaw and the boresight matrix; body-to-world
+    /// rotation; scanner (with boresight) to world rotation.
+    attitude: Option<([u64; 12], DMat3, DMat3)>,
+}
+
+impl FrameCache {
+    /// [`FlightLine::frame`] of `line`.
+    fn line(&mut self, line: &FlightLine) -> LineFrame {
+        let (a, b) = (line.start_m, line.end_m);
+        let key = [
+            u64::from(line.index),
+            a.x.to_bits(),
+            a.y.to_bits(),
+            a.z.to_bits(),
+            b.x.to_bits(),
+            b.y.to_bits(),
+            b.z.to_bits(),
+        ];
+        match self.line {
+            Some((k, frame)) if k == key => frame,
+            _ => {
+                let frame = line.frame();
+                self.line = Some((key, frame));
+                frame
+            }
+        }
+    }
+
+    /// The body-to-world rotation of `attitude` and `body · boresight ·`
+    /// [`SCANNER_TO_LEVEL_NORTH`].
+    fn rotations(&mut self, attitude: &Attitude, boresight: DMat3) -> (DMat3, DMat3) {
+        let b = boresight.to_cols_array();
+        let key = [
+            attitude.roll_rad,
+            attitude.pitch_rad,
+            attitude.yaw_rad,
+            b[0],
+            b[1],
+            b[2],
+            b[3],
+            b[4],
+            b[5],
+            b[6],
+            b[7],
+            b[8],
+        ]
+        .map(f64::to_bits);
+        match self.attitude {
+            Some((k, body, rot)) if k == key => (body, rot),
+            _ => {
+                let body = attitude.body_to_world();
+                let rot = body * boresight * SCANNER_TO_LEVEL_NORTH;
+                self.attitude = Some((key, body, rot));
+                (body, rot)
+            }
+        }
+    }
 }
 
 impl Scratch {
@@ -185,11 +252,11 @@ impl<'a> Simulator<'a> {
         let t = line.start_time_s + t_line;
         // The true pose casts the rays: the scanner sits at the lever arm
         // from the IMU and is turned by the boresight misalignment.
-        let pose = line.pose_at(t_line);
+        let frame = scratch.frames.line(line);
+        let pose = line.pose_in(&frame, t_line);
         let mirror = &s.scanner.mirror;
         let theta = mirror.angle_at(t);
-        let body = pose.attitude.body_to_world();
-        let rot = body * self.boresight * SCANNER_TO_LEVEL_NORTH;
+        let (body, rot) = scratch.frames.rotations(&pose.attitude, self.boresight);
         let origin = pose.position_m + body * s.navigation.lever_arm_m;
         // The deflection's third column is the beam direction
         // (`Mirror::beam_direction`), from the same sine and cosine.
@@ -290,8 +357,8 @@ impl<'a> Simulator<'a> {
         // and the measured ranges (navigation.rs).
         let nav = &s.navigation;
         let mut measure: Option<Stream> = None;
-        let (obs_origin, obs_attitude, obs_central) = if self.exact_georeferencing {
-            (origin, pose.attitude, central)
+        let (obs_origin, obs_body, obs_central) = if self.exact_georeferencing {
+            (origin, body, central)
         } else {
             let obs = observed_pose(
                 &pose,
@@ -309,15 +376,21 @@ impl<'a> Simulator<'a> {
             } else {
                 theta
             };
-            let dir = obs.attitude.scanner_to_world() * Mirror::beam_direction(theta_obs);
-            (obs.position_m, obs.attitude, dir)
+            // Without attitude errors the observed rotation is the true one,
+            // to the bit: no need to compute it again.
+            let a = (obs.attitude, pose.attitude);
+            let obs_body = if [a.0.roll_rad, a.0.pitch_rad, a.0.yaw_rad].map(f64::to_bits)
+                == [a.1.roll_rad, a.1.pitch_rad, a.1.yaw_rad].map(f64::to_bits)
+            {
+                body
+            } else {
+                obs.attitude.body_to_world()
+            };
+            // `Attitude::scanner_to_world` from that rotation.
+            let dir = obs_body * SCANNER_TO_LEVEL_NORTH * Mirror::beam_direction(theta_obs);
+            (obs.position_m, obs_body, dir)
         };
         // Attributes shared by the pulse's points.
-        let obs_body = if self.exact_georeferencing {
-            body
-        } else {
-            obs_attitude.body_to_world()
-        };
         let right = obs_body * DVec3::X;
         let right_h = DVec3::new(right.x, right.y, 0.0).normalize_or_zero();
         let scan_angle_deg = obs_central.dot(right_h).atan2(-obs_central.z).to_degrees();
@@ -696,5 +769,59 @@ impl Timer {
     /// Seconds since the start.
     pub fn seconds(&self) -> f64 {
         self.0.elapsed().as_secs_f64()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{rot_x, rot_y, rot_z};
+
+    fn line(index: u32, start: DVec3, end: DVec3) -> FlightLine {
+        FlightLine {
+            index,
+            start_m: start,
+            end_m: end,
+            speed_mps: 50.0,
+            start_time_s: 0.0,
+            sway: None,
+            nav_errors: Default::default(),
+            drift: None,
+            track: None,
+        }
+    }
+
+    #[test]
+    fn frame_cache_answers_as_computed_afresh() {
+        let mut cache = FrameCache::default();
+        // Same number, other ends; then back: each answer is that line's own.
+        let lines = [
+            line(0, DVec3::new(-150.0, 0.0, 500.0), DVec3::new(150.0, 0.0, 500.0)),
+            line(0, DVec3::new(0.0, -150.0, 500.0), DVec3::new(0.0, 150.0, 500.0)),
+            line(1, DVec3::new(0.0, -150.0, 500.0), DVec3::new(0.0, 150.0, 500.0)),
+        ];
+        for l in lines.iter().chain(&lines).chain(lines.iter().rev()) {
+            assert_eq!(cache.line(l), l.frame());
+            let (a, b) = (l.pose_in(&cache.line(l), 1.7), l.pose_at(1.7));
+            assert_eq!((a.position_m, a.attitude), (b.position_m, b.attitude));
+        }
+        // Repeated and changing attitudes and boresights (a boresight change
+        // alone must not return the old scanner rotation).
+        let boresights = [DMat3::IDENTITY, rot_z(1e-3) * rot_x(-2e-3) * rot_y(5e-4)];
+        let attitudes = [
+            Attitude::default(),
+            Attitude {
+                roll_rad: 0.01,
+                pitch_rad: -0.02,
+                yaw_rad: 1.3,
+            },
+        ];
+        for step in 0..12 {
+            let att = attitudes[(step / 3) % 2];
+            let bs = boresights[step % 2];
+            let body = att.body_to_world();
+            let want = (body, body * bs * SCANNER_TO_LEVEL_NORTH);
+            assert_eq!(cache.rotations(&att, bs), want, "step {step}");
+        }
     }
 }
