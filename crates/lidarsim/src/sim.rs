@@ -312,7 +312,7 @@ impl<'a> Simulator<'a> {
                     (t, prim, power, DVec3::NAN)
                 }
                 Fate::Passed { transmission } => {
-                    let Some(hit) = scratch.trace.hits[i] else {
+                    let Some(hit) = scratch.trace.hit(i) else {
                         continue;
                     };
                     let prim = &scene.primitives[hit.prim as usize];
@@ -796,9 +796,21 @@ mod tests {
         let mut cache = FrameCache::default();
         // Same number, other ends; then back: each answer is that line's own.
         let lines = [
-            line(0, DVec3::new(-150.0, 0.0, 500.0), DVec3::new(150.0, 0.0, 500.0)),
-            line(0, DVec3::new(0.0, -150.0, 500.0), DVec3::new(0.0, 150.0, 500.0)),
-            line(1, DVec3::new(0.0, -150.0, 500.0), DVec3::new(0.0, 150.0, 500.0)),
+            line(
+                0,
+                DVec3::new(-150.0, 0.0, 500.0),
+                DVec3::new(150.0, 0.0, 500.0),
+            ),
+            line(
+                0,
+                DVec3::new(0.0, -150.0, 500.0),
+                DVec3::new(0.0, 150.0, 500.0),
+            ),
+            line(
+                1,
+                DVec3::new(0.0, -150.0, 500.0),
+                DVec3::new(0.0, 150.0, 500.0),
+            ),
         ];
         for l in lines.iter().chain(&lines).chain(lines.iter().rev()) {
             assert_eq!(cache.line(l), l.frame());

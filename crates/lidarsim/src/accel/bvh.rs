@@ -7,7 +7,7 @@
 //! `f64` primitives: a box test may let through a primitive that the exact
 //! `f64` test then rejects, never the reverse.
 
-use super::{Hit, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
+use super::{Hit, NO_HIT, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
 use crate::geometry::{Aabb, DVec3, Ray};
 use crate::scene::{
     Coverage, EdgeTest, Primitive, Scene, Shape, Triangle, TriangleFan, bundle_spread,
@@ -557,10 +557,10 @@ impl RayCaster for Bvh {
         out.clear();
         let bundle = Bundle::new(origin - self.origin, dirs);
         let cone = bundle_spread(dirs);
-        let mut best = std::mem::take(&mut out.best);
+        let mut best = std::mem::take(&mut out.hits);
         let mut volumes = std::mem::take(&mut out.volumes);
         best.clear();
-        best.resize(dirs.len(), (t_max, u32::MAX, DVec3::NAN));
+        best.resize(dirs.len(), (t_max, NO_HIT, DVec3::NAN));
         volumes.clear();
         let mut missing = dirs.len();
         let mut far = t_max;
@@ -588,7 +588,7 @@ impl RayCaster for Bvh {
                     for (dir, b) in dirs.iter().zip(best.iter_mut()) {
                         let ray = Ray { origin, dir: *dir };
                         if let Some(t) = prim.intersect(&ray, t_min, b.0) {
-                            if b.1 == u32::MAX {
+                            if b.1 == NO_HIT {
                                 missing -= 1;
                             }
                             *b = (t, p, DVec3::NAN);
@@ -642,54 +642,43 @@ impl RayCaster for Bvh {
         // normal is computed once.
         let mut flat: Option<(u32, DVec3)> = None;
         if volumes.is_empty() {
-            out.hits
-                .extend(dirs.iter().zip(best.iter()).map(|(dir, &(t, p, normal))| {
-                    (p != u32::MAX).then(|| {
-                        if !normal.x.is_nan() {
-                            return Hit { t, prim: p, normal };
+            for (dir, (t, p, normal)) in dirs.iter().zip(best.iter_mut()) {
+                if *p == NO_HIT || !normal.x.is_nan() {
+                    continue;
+                }
+                let n = match flat {
+                    Some((q, n)) if q == *p => n,
+                    _ => {
+                        let prim = &self.scene.primitives[*p as usize];
+                        let n = prim.normal_at(origin + *dir * *t);
+                        if prim.is_flat() {
+                            flat = Some((*p, n));
                         }
-                        let n = match flat {
-                            Some((q, n)) if q == p => n,
-                            _ => {
-                                let prim = &self.scene.primitives[p as usize];
-                                let n = prim.normal_at(origin + *dir * t);
-                                if prim.is_flat() {
-                                    flat = Some((p, n));
-                                }
-                                n
-                            }
-                        };
-                        Hit {
-                            t,
-                            prim: p,
-                            normal: if n.dot(*dir) > 0.0 { -n } else { n },
-                        }
-                    })
-                }));
-            out.best = best;
+                        n
+                    }
+                };
+                *normal = if n.dot(*dir) > 0.0 { -n } else { n };
+            }
+            out.hits = best;
             out.volumes = volumes;
             return;
         }
-        for (dir, &(t, p, normal)) in dirs.iter().zip(best.iter()) {
+        for (dir, (t, p, normal)) in dirs.iter().zip(best.iter_mut()) {
             let ray = Ray { origin, dir: *dir };
             spans.clear();
             for &v in &volumes {
-                if let Some(s) = volume_span(&self.scene.primitives[v as usize], v, &ray, t_min, t)
+                if let Some(s) = volume_span(&self.scene.primitives[v as usize], v, &ray, t_min, *t)
                 {
                     spans.push(s);
                 }
             }
-            finish_spans(spans, t);
-            let hit = (p != u32::MAX).then(|| {
-                if normal.x.is_nan() {
-                    make_hit(&self.scene, p, &ray, t)
-                } else {
-                    Hit { t, prim: p, normal }
-                }
-            });
-            out.push(hit, spans);
+            finish_spans(spans, *t);
+            out.push_spans(spans);
+            if *p != NO_HIT && normal.x.is_nan() {
+                *normal = make_hit(&self.scene, *p, &ray, *t).normal;
+            }
         }
-        out.best = best;
+        out.hits = best;
         out.volumes = volumes;
     }
 }
@@ -748,7 +737,7 @@ fn record_hits(
             continue;
         }
         if let Some((t, normal)) = fan.hit(*d, t_min, slot.0) {
-            first += usize::from(slot.1 == u32::MAX);
+            first += usize::from(slot.1 == NO_HIT);
             *slot = (t, p, normal);
         }
     }
@@ -1223,10 +1212,11 @@ mod tests {
             for (i, d) in dirs.iter().enumerate() {
                 let ray = Ray { origin, dir: *d };
                 let want = brute.trace(&ray, 0.5, 1e4, &mut spans);
-                let got = trace.hits[i];
+                let got = trace.hit(i);
                 prop_assert_eq!(want.map(|h| h.prim), got.map(|h| h.prim));
                 // Same arithmetic: the same distances, to the bit.
                 prop_assert_eq!(want.map(|h| h.t), got.map(|h| h.t));
+                prop_assert_eq!(want.map(|h| h.normal), got.map(|h| h.normal));
                 prop_assert_eq!(&spans[..], trace.spans_of(i));
             }
         }

@@ -43,17 +43,19 @@ pub struct VolumeSpan {
 /// Closest hits and volume spans of all sub-rays of one pulse.
 #[derive(Clone, Debug, Default)]
 pub struct PulseTrace {
-    /// Closest surface hit of each sub-ray.
-    pub hits: Vec<Option<Hit>>,
+    /// Per sub-ray: distance, primitive ([`NO_HIT`] for none) and unit
+    /// normal facing the ray of its closest surface. Bundle traversals work
+    /// in it directly, with a NaN normal until the end for surfaces other
+    /// than triangles.
+    pub(crate) hits: Vec<(f64, u32, DVec3)>,
     spans: Vec<VolumeSpan>,
     ranges: Vec<(u32, u32)>,
-    /// Working storage of bundle traversals: closest distance, primitive
-    /// and (for triangles; NaN otherwise) unit normal facing the ray, of
-    /// each sub-ray so far.
-    pub(crate) best: Vec<(f64, u32, DVec3)>,
     /// Working storage of bundle traversals: volumes met by the bundle.
     pub(crate) volumes: Vec<u32>,
 }
+
+/// The primitive number of a sub-ray without a hit in [`PulseTrace`].
+pub(crate) const NO_HIT: u32 = u32::MAX;
 
 impl PulseTrace {
     /// Empties the trace for `n` sub-rays.
@@ -66,10 +68,36 @@ impl PulseTrace {
     /// Records the result of the next sub-ray: its hit and the spans that
     /// [`RayCaster::trace`] left in `spans`.
     pub fn push(&mut self, hit: Option<Hit>, spans: &[VolumeSpan]) {
+        self.push_spans(spans);
+        self.hits.push(match hit {
+            Some(h) => (h.t, h.prim, h.normal),
+            None => (f64::INFINITY, NO_HIT, DVec3::NAN),
+        });
+    }
+
+    /// Records the spans of the next sub-ray, whose hit the caller sets in
+    /// `hits`.
+    pub(crate) fn push_spans(&mut self, spans: &[VolumeSpan]) {
         let start = self.spans.len() as u32;
         self.spans.extend_from_slice(spans);
         self.ranges.push((start, self.spans.len() as u32));
-        self.hits.push(hit);
+    }
+
+    /// Number of sub-rays recorded.
+    pub fn len(&self) -> usize {
+        self.hits.len()
+    }
+
+    /// Whether no sub-ray is recorded.
+    pub fn is_empty(&self) -> bool {
+        self.hits.is_empty()
+    }
+
+    /// Closest surface hit of sub-ray `i`.
+    #[inline]
+    pub fn hit(&self, i: usize) -> Option<Hit> {
+        let (t, prim, normal) = self.hits[i];
+        (prim != NO_HIT).then_some(Hit { t, prim, normal })
     }
 
     /// Volume spans of sub-ray `i`, sorted by entry distance.
