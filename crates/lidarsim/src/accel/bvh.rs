@@ -10,7 +10,7 @@
 use super::{Hit, NO_HIT, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
 use crate::geometry::{Aabb, DVec3, Ray};
 use crate::scene::{
-    Coverage, EdgeTest, Primitive, Scene, Shape, Triangle, TriangleFan, bundle_spread,
+    Coverage, EdgeTest, Primitive, Scene, Shape, Triangle, TriangleFan, bundle_cone,
 };
 
 const MAX_LEAF: usize = 4;
@@ -555,8 +555,8 @@ impl RayCaster for Bvh {
             return;
         }
         out.clear();
-        let bundle = Bundle::new(origin - self.origin, dirs);
-        let cone = bundle_spread(dirs);
+        let (bundle, sum) = Bundle::new(origin - self.origin, dirs);
+        let cone = bundle_cone(dirs, sum);
         let mut best = std::mem::take(&mut out.hits);
         let mut volumes = std::mem::take(&mut out.volumes);
         best.clear();
@@ -687,7 +687,7 @@ impl RayCaster for Bvh {
 /// arithmetic of [`Triangle::intersect`], its per-origin part done once),
 /// updating `best` (distance, primitive, normal) where the triangle is closer;
 /// returns how many rays got their first hit. `cone` is the bundle's axis
-/// and spread ([`bundle_spread`]): a triangle the whole bundle misses costs
+/// and spread ([`crate::scene::bundle_spread`]): a triangle the whole bundle misses costs
 /// only its edge planes, one it covers skips the per-ray edge tests, and
 /// for one it straddles each ray is tested on the straddled edges only.
 #[inline]
@@ -764,22 +764,46 @@ enum Sign {
     Straddles,
 }
 
-impl Bundle {
-    fn new(o: DVec3, dirs: &[DVec3]) -> Self {
-        let mut lo = [f64::INFINITY; 3];
-        let mut hi = [f64::NEG_INFINITY; 3];
-        // Plain comparisons: the components are finite, so these are the
-        // bounds `f64::min`/`max` give, without their NaN handling.
-        for d in dirs {
-            for a in 0..3 {
-                if d[a] < lo[a] {
-                    lo[a] = d[a];
-                }
-                if d[a] > hi[a] {
-                    hi[a] = d[a];
-                }
+/// Per axis the smallest and largest component of `dirs`, and their sum
+/// (added in order from zero), in one pass.
+#[inline]
+fn direction_bounds(dirs: &[DVec3]) -> ([f64; 3], [f64; 3], DVec3) {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    {
+        sse::direction_bounds(dirs)
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    {
+        direction_bounds_scalar(dirs)
+    }
+}
+
+/// [`direction_bounds`] one component at a time (the definition).
+#[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
+fn direction_bounds_scalar(dirs: &[DVec3]) -> ([f64; 3], [f64; 3], DVec3) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    let mut sum = DVec3::ZERO;
+    // Plain comparisons: the components are finite, so these are the
+    // bounds `f64::min`/`max` give, without their NaN handling.
+    for d in dirs {
+        for a in 0..3 {
+            if d[a] < lo[a] {
+                lo[a] = d[a];
+            }
+            if d[a] > hi[a] {
+                hi[a] = d[a];
             }
         }
+        sum += *d;
+    }
+    (lo, hi, sum)
+}
+
+impl Bundle {
+    /// The bundle of `dirs` from `o`, and the sum of `dirs`.
+    fn new(o: DVec3, dirs: &[DVec3]) -> (Self, DVec3) {
+        let (lo, hi, sum) = direction_bounds(dirs);
         let mut sign = [Sign::Straddles; 3];
         let mut inv_lo = [0.0f32; 3];
         let mut inv_hi = [0.0f32; 3];
@@ -800,14 +824,15 @@ impl Bundle {
             inv_hi[a] = (1.0 / h) as f32;
         }
         let o = [o.x as f32, o.y as f32, o.z as f32];
-        Self {
+        let bundle = Self {
             #[cfg(target_arch = "x86_64")]
             simd: sse::BundleLanes::new(o, sign, inv_lo, inv_hi),
             o,
             sign,
             inv_lo,
             inv_hi,
-        }
+        };
+        (bundle, sum)
     }
 
     /// A lower bound of the distance at which some ray of the bundle enters
@@ -875,6 +900,8 @@ impl Bundle {
 /// register (SSE2, part of every x86-64 processor).
 #[cfg(target_arch = "x86_64")]
 mod sse {
+    #[cfg(target_feature = "avx")]
+    use super::DVec3;
     use super::{Node, Sign};
     use std::arch::x86_64::*;
 
@@ -914,6 +941,39 @@ mod sse {
     fn select(m: __m128, a: __m128, b: __m128) -> __m128 {
         // SAFETY: SSE2 is part of the x86-64 baseline.
         unsafe { _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)) }
+    }
+
+    /// [`super::direction_bounds`] with the three components of a
+    /// direction in lanes 0–2 of an AVX register: the same comparisons
+    /// (`_mm256_min_pd(d, lo)` is `d < lo ? d : lo`) and the same additions
+    /// in the same order.
+    #[cfg(target_feature = "avx")]
+    #[inline]
+    pub(super) fn direction_bounds(dirs: &[DVec3]) -> ([f64; 3], [f64; 3], DVec3) {
+        // SAFETY: the build enables AVX (checked by the `cfg`); each masked
+        // load reads the three `f64` of one `DVec3` and nothing beyond.
+        unsafe {
+            let mask = _mm256_setr_epi64x(-1, -1, -1, 0);
+            let mut lo = _mm256_set1_pd(f64::INFINITY);
+            let mut hi = _mm256_set1_pd(f64::NEG_INFINITY);
+            let mut sum = _mm256_setzero_pd();
+            for d in dirs {
+                let v = _mm256_maskload_pd(d as *const DVec3 as *const f64, mask);
+                lo = _mm256_min_pd(v, lo);
+                hi = _mm256_max_pd(v, hi);
+                sum = _mm256_add_pd(sum, v);
+            }
+            let mut out = [[0.0f64; 4]; 3];
+            _mm256_storeu_pd(out[0].as_mut_ptr(), lo);
+            _mm256_storeu_pd(out[1].as_mut_ptr(), hi);
+            _mm256_storeu_pd(out[2].as_mut_ptr(), sum);
+            let [lo, hi, sum] = out;
+            (
+                [lo[0], lo[1], lo[2]],
+                [hi[0], hi[1], hi[2]],
+                DVec3::new(sum[0], sum[1], sum[2]),
+            )
+        }
     }
 
     impl BundleLanes {
@@ -1144,7 +1204,26 @@ mod tests {
                 .map(|_| (c + DVec3::new(u(), u(), u()) * spread).normalize())
                 .collect();
             let o = DVec3::new(u(), u(), u()) * 50.0;
-            let bundle = Bundle::new(o, &dirs);
+            let (bundle, sum) = Bundle::new(o, &dirs);
+            // Bounds and sum as the definition gives them, to the bit (signed
+            // zeros included, from directions in a coordinate plane).
+            let mut flat_dirs = dirs.clone();
+            for (i, d) in flat_dirs.iter_mut().enumerate() {
+                d[i % 3] = if i % 2 == 0 { 0.0 } else { -0.0 };
+            }
+            for set in [&dirs, &flat_dirs] {
+                let bits = |(lo, hi, sum): ([f64; 3], [f64; 3], DVec3)| {
+                    let sum = [sum.x, sum.y, sum.z];
+                    [lo, hi, sum].map(|v| v.map(f64::to_bits))
+                };
+                assert_eq!(
+                    bits(direction_bounds(set)),
+                    bits(direction_bounds_scalar(set)),
+                    "case {case}"
+                );
+            }
+            assert_eq!(direction_bounds_scalar(&dirs).2, sum);
+            assert_eq!(bundle_cone(&dirs, sum), crate::scene::bundle_spread(&dirs));
             // Boxes near the bundle's axis, behind the origin or ahead of it.
             let near = o + c * (u() * 200.0) + DVec3::new(u(), u(), u()) * 30.0;
             let size = DVec3::new(u() + 0.5, u() + 0.5, u() + 0.5) * [0.0, 1.0, 20.0][case % 3];

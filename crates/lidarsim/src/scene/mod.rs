@@ -375,7 +375,14 @@ impl TriangleFan {
 /// rounding of the triple products of unit vectors) so that the
 /// classification is never wrong.
 pub fn bundle_spread(dirs: &[DVec3]) -> (DVec3, f64) {
-    let axis = dirs.iter().fold(DVec3::ZERO, |s, d| s + *d) / dirs.len().max(1) as f64;
+    bundle_cone(dirs, dirs.iter().fold(DVec3::ZERO, |s, d| s + *d))
+}
+
+/// [`bundle_spread`] given the sum of the directions (added in order from
+/// zero).
+#[inline]
+pub fn bundle_cone(dirs: &[DVec3], sum: DVec3) -> (DVec3, f64) {
+    let axis = sum / dirs.len().max(1) as f64;
     let spread = dirs
         .iter()
         .map(|d| (*d - axis).length_squared())
