@@ -563,6 +563,9 @@ impl RayCaster for Bvh {
         best.resize(dirs.len(), (t_max, NO_HIT, DVec3::NAN));
         volumes.clear();
         let mut missing = dirs.len();
+        // Whether a hit on a primitive other than a triangle (recorded
+        // without its normal) was ever recorded.
+        let mut normals_missing = false;
         let mut far = t_max;
         let slack = |t: f64| (t + self.pad) as f32 * (1.0 + 1e-6);
         let mut stack = [0u32; STACK];
@@ -592,6 +595,7 @@ impl RayCaster for Bvh {
                                 missing -= 1;
                             }
                             *b = (t, p, DVec3::NAN);
+                            normals_missing = true;
                         }
                     }
                 }
@@ -642,6 +646,11 @@ impl RayCaster for Bvh {
         // normal is computed once.
         let mut flat: Option<(u32, DVec3)> = None;
         if volumes.is_empty() {
+            if !normals_missing {
+                out.hits = best;
+                out.volumes = volumes;
+                return;
+            }
             for (dir, (t, p, normal)) in dirs.iter().zip(best.iter_mut()) {
                 if *p == NO_HIT || !normal.x.is_nan() {
                     continue;
@@ -1123,7 +1132,7 @@ fn slab(n: &Node, o: &[f32; 3], inv: &[f32; 3], t_max: f32) -> Option<f32> {
 mod tests {
     use super::*;
     use crate::accel::BruteForce;
-    use crate::scene::{Material, Shape, SurfaceClass, Triangle};
+    use crate::scene::{Material, Primitive, Shape, SurfaceClass, Triangle};
     use proptest::prelude::*;
 
     fn random_scene(seed: u64, n: usize) -> Scene {
@@ -1172,6 +1181,41 @@ mod tests {
     }
 
     /// A triangle soup with trees standing in it.
+    /// Triangles, and horizontal rectangles (polygons, which carry no
+    /// normal from the bundle test) at random heights, some of them tilted.
+    fn scene_with_polygons(seed: u64) -> Scene {
+        let mut scene = random_scene(seed, 200);
+        let mut s = crate::rng::Stream::new(seed, 2, 0, crate::rng::Purpose::Test);
+        let (m, o) = (0, 0);
+        for _ in 0..30 {
+            let c = DVec3::new(
+                s.uniform() * 200.0 - 100.0,
+                s.uniform() * 200.0 - 100.0,
+                0.0,
+            );
+            let (w, z, tilt) = (
+                5.0 + 20.0 * s.uniform(),
+                40.0 * s.uniform(),
+                s.uniform() - 0.5,
+            );
+            let corner = |x: f64, y: f64| c + DVec3::new(x * w, y * w, z + tilt * x * w);
+            let poly = crate::scene::Polygon::new(vec![
+                corner(-1.0, -1.0),
+                corner(1.0, -1.0),
+                corner(1.0, 1.0),
+                corner(-1.0, 1.0),
+            ])
+            .expect("a planar rectangle");
+            scene.primitives.push(Primitive {
+                shape: Shape::Polygon(Box::new(poly)),
+                material: m,
+                class: SurfaceClass::Unclassified,
+                object: o,
+            });
+        }
+        scene
+    }
+
     fn scene_with_trees(seed: u64) -> Scene {
         let mut scene = random_scene(seed, 300);
         let mut s = crate::rng::Stream::new(seed, 1, 0, crate::rng::Purpose::Test);
@@ -1270,33 +1314,36 @@ mod tests {
         fn pulse_bundles_match_single_rays(seed in 0u64..1000, ox in -120.0..120.0f64,
                                            oy in -120.0..120.0f64, dx in -0.5..0.5f64,
                                            dy in -0.5..0.5f64, spread in 1e-5..0.2f64) {
-            let scene = scene_with_trees(seed);
-            let brute = BruteForce::new(scene.clone());
-            let bvh = Bvh::build(scene);
-            let origin = DVec3::new(ox, oy, 300.0);
-            let c = DVec3::new(dx, dy, -1.0).normalize();
-            let u = c.any_orthonormal_vector();
-            let v = c.cross(u);
-            // A spiral of 19 directions around the central one.
-            let dirs: Vec<DVec3> = (0..19)
-                .map(|i| {
-                    let r = spread * (i as f64 / 18.0).sqrt();
-                    let a = i as f64 * 2.399_963;
-                    (c + u * (r * a.cos()) + v * (r * a.sin())).normalize()
-                })
-                .collect();
-            let mut spans = Vec::new();
-            let mut trace = crate::accel::PulseTrace::default();
-            bvh.trace_pulse(origin, &dirs, 0.5, 1e4, &mut spans, &mut trace);
-            for (i, d) in dirs.iter().enumerate() {
-                let ray = Ray { origin, dir: *d };
-                let want = brute.trace(&ray, 0.5, 1e4, &mut spans);
-                let got = trace.hit(i);
-                prop_assert_eq!(want.map(|h| h.prim), got.map(|h| h.prim));
-                // Same arithmetic: the same distances, to the bit.
-                prop_assert_eq!(want.map(|h| h.t), got.map(|h| h.t));
-                prop_assert_eq!(want.map(|h| h.normal), got.map(|h| h.normal));
-                prop_assert_eq!(&spans[..], trace.spans_of(i));
+            // With crowns (per-ray spans), and with polygons but no
+            // volumes (normals filled in after the traversal).
+            for scene in [scene_with_trees(seed), scene_with_polygons(seed)] {
+                let brute = BruteForce::new(scene.clone());
+                let bvh = Bvh::build(scene);
+                let origin = DVec3::new(ox, oy, 300.0);
+                let c = DVec3::new(dx, dy, -1.0).normalize();
+                let u = c.any_orthonormal_vector();
+                let v = c.cross(u);
+                // A spiral of 19 directions around the central one.
+                let dirs: Vec<DVec3> = (0..19)
+                    .map(|i| {
+                        let r = spread * (i as f64 / 18.0).sqrt();
+                        let a = i as f64 * 2.399_963;
+                        (c + u * (r * a.cos()) + v * (r * a.sin())).normalize()
+                    })
+                    .collect();
+                let mut spans = Vec::new();
+                let mut trace = crate::accel::PulseTrace::default();
+                bvh.trace_pulse(origin, &dirs, 0.5, 1e4, &mut spans, &mut trace);
+                for (i, d) in dirs.iter().enumerate() {
+                    let ray = Ray { origin, dir: *d };
+                    let want = brute.trace(&ray, 0.5, 1e4, &mut spans);
+                    let got = trace.hit(i);
+                    prop_assert_eq!(want.map(|h| h.prim), got.map(|h| h.prim));
+                    // Same arithmetic: the same distances, to the bit.
+                    prop_assert_eq!(want.map(|h| h.t), got.map(|h| h.t));
+                    prop_assert_eq!(want.map(|h| h.normal), got.map(|h| h.normal));
+                    prop_assert_eq!(&spans[..], trace.spans_of(i));
+                }
             }
         }
 
