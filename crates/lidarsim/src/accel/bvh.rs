@@ -945,6 +945,14 @@ mod sse {
         unsafe { _mm_setr_ps(v[0], v[1], v[2], 0.0) }
     }
 
+    /// The smaller of an exit bound and the distance limit: a comparison
+    /// rather than `f32::min`, as neither is NaN (finite box corners and
+    /// reciprocals, infinities only from the inert lanes).
+    #[inline(always)]
+    fn below_limit(t1: f32, t_max: f32) -> f32 {
+        if t1 < t_max { t1 } else { t_max }
+    }
+
     /// `a` where `m` is set, else `b`.
     #[inline(always)]
     fn select(m: __m128, a: __m128, b: __m128) -> __m128 {
@@ -1038,7 +1046,7 @@ mod sse {
                 let t1 = _mm_min_ps(t1, _mm_movehl_ps(t1, t1));
                 let t1 = _mm_min_ss(t1, _mm_shuffle_ps::<0b01>(t1, t1));
                 let t0 = _mm_cvtss_f32(t0);
-                let t1 = _mm_cvtss_f32(t1).min(t_max);
+                let t1 = below_limit(_mm_cvtss_f32(t1), t_max);
                 (t0 <= t1).then_some(t0)
             }
         }
@@ -1089,7 +1097,7 @@ mod sse {
                 let t1 = _mm256_min_ps(t1, _mm256_shuffle_ps::<0b01>(t1, t1));
                 let answer = |t0: __m128, t1: __m128| {
                     let t0 = _mm_cvtss_f32(t0);
-                    let t1 = _mm_cvtss_f32(t1).min(t_max);
+                    let t1 = below_limit(_mm_cvtss_f32(t1), t_max);
                     (t0 <= t1).then_some(t0)
                 };
                 (
