@@ -429,6 +429,14 @@ impl<'a> Simulator<'a> {
                 if b < lo || b >= hi {
                     continue;
                 }
+                // Neighbouring sub-rays mostly meet the same surface: the
+                // last one added first (each sum still adds in ray order).
+                if let Some((q, e)) = scratch.energy_by_prim.last_mut()
+                    && *q == p
+                {
+                    *e += r.power;
+                    continue;
+                }
                 match scratch.energy_by_prim.iter_mut().find(|(q, _)| *q == p) {
                     Some((_, e)) => *e += r.power,
                     None => scratch.energy_by_prim.push((p, r.power)),
