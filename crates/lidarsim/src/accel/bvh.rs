@@ -568,7 +568,10 @@ impl RayCaster for Bvh {
         let mut normals_missing = false;
         let mut far = t_max;
         let slack = |t: f64| (t + self.pad) as f32 * (1.0 + 1e-6);
-        let mut stack = [0u32; STACK];
+        // The traversal stack lives in the trace: sized once, never cleared
+        // (every entry is written before it is read).
+        let mut stack = std::mem::take(&mut out.stack);
+        stack.resize(STACK, 0);
         let mut sp = 0usize;
         let mut node = 0usize;
         if bundle.enters(&self.nodes[0], slack(far)).is_none() {
@@ -641,6 +644,7 @@ impl RayCaster for Bvh {
                 }
             }
         }
+        out.stack = stack;
         // Triangle hits carry their normal, already facing the ray, from the
         // test; other sub-rays mostly hit the same flat primitive, whose
         // normal is computed once.

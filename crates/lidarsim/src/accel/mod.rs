@@ -52,6 +52,8 @@ pub struct PulseTrace {
     ranges: Vec<(u32, u32)>,
     /// Working storage of bundle traversals: volumes met by the bundle.
     pub(crate) volumes: Vec<u32>,
+    /// Working storage of bundle traversals: the node stack.
+    pub(crate) stack: Vec<u32>,
 }
 
 /// The primitive number of a sub-ray without a hit in [`PulseTrace`].
