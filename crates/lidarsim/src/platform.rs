@@ -390,10 +390,11 @@ pub fn plan_lines(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn line(start: DVec3, end: DVec3) -> FlightLine {
+    /// A level line without sway, drift or errors, at 50 m/s.
+    pub(crate) fn line(start: DVec3, end: DVec3) -> FlightLine {
         FlightLine {
             index: 0,
             start_m: start,

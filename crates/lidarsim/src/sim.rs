@@ -90,8 +90,8 @@ pub struct Scratch {
 /// the line's direction and heading, and the rotations of its attitude.
 #[derive(Default)]
 struct FrameCache {
-    /// Line number and the bits of its start and end.
-    line: Option<([u64; 7], LineFrame)>,
+    /// Bits of the line's start and end (all its frame depends on).
+    line: Option<([u64; 6], LineFrame)>,
     /// Bits of roll, pitch, yaw and the boresight matrix; body-to-world
     /// rotation; scanner (with boresight) to world rotation.
     attitude: Option<([u64; 12], DMat3, DMat3)>,
@@ -101,15 +101,7 @@ impl FrameCache {
     /// [`FlightLine::frame`] of `line`.
     fn line(&mut self, line: &FlightLine) -> LineFrame {
         let (a, b) = (line.start_m, line.end_m);
-        let key = [
-            u64::from(line.index),
-            a.x.to_bits(),
-            a.y.to_bits(),
-            a.z.to_bits(),
-            b.x.to_bits(),
-            b.y.to_bits(),
-            b.z.to_bits(),
-        ];
+        let key = [a.x, a.y, a.z, b.x, b.y, b.z].map(f64::to_bits);
         match self.line {
             Some((k, frame)) if k == key => frame,
             _ => {
@@ -788,14 +780,7 @@ mod tests {
     fn line(index: u32, start: DVec3, end: DVec3) -> FlightLine {
         FlightLine {
             index,
-            start_m: start,
-            end_m: end,
-            speed_mps: 50.0,
-            start_time_s: 0.0,
-            sway: None,
-            nav_errors: Default::default(),
-            drift: None,
-            track: None,
+            ..crate::platform::tests::line(start, end)
         }
     }
 
