@@ -787,23 +787,15 @@ mod tests {
     #[test]
     fn frame_cache_answers_as_computed_afresh() {
         let mut cache = FrameCache::default();
-        // Same number, other ends; then back: each answer is that line's own.
+        // Same number, other ends; the same end from another start; the same
+        // start to another end; then back: each answer is that line's own.
+        let p = |x: f64, y: f64, z: f64| DVec3::new(x, y, z);
         let lines = [
-            line(
-                0,
-                DVec3::new(-150.0, 0.0, 500.0),
-                DVec3::new(150.0, 0.0, 500.0),
-            ),
-            line(
-                0,
-                DVec3::new(0.0, -150.0, 500.0),
-                DVec3::new(0.0, 150.0, 500.0),
-            ),
-            line(
-                1,
-                DVec3::new(0.0, -150.0, 500.0),
-                DVec3::new(0.0, 150.0, 500.0),
-            ),
+            line(0, p(-150.0, 0.0, 500.0), p(150.0, 0.0, 500.0)),
+            line(0, p(-150.0, 50.0, 500.0), p(150.0, 0.0, 500.0)),
+            line(0, p(-150.0, 50.0, 500.0), p(150.0, 80.0, 510.0)),
+            line(0, p(0.0, -150.0, 500.0), p(0.0, 150.0, 500.0)),
+            line(1, p(0.0, -150.0, 500.0), p(0.0, 150.0, 500.0)),
         ];
         for l in lines.iter().chain(&lines).chain(lines.iter().rev()) {
             assert_eq!(cache.line(l), l.frame());
