@@ -85,16 +85,6 @@ impl PulseTrace {
         self.ranges.push((start, self.spans.len() as u32));
     }
 
-    /// Number of sub-rays recorded.
-    pub fn len(&self) -> usize {
-        self.hits.len()
-    }
-
-    /// Whether no sub-ray is recorded.
-    pub fn is_empty(&self) -> bool {
-        self.hits.is_empty()
-    }
-
     /// Closest surface hit of sub-ray `i`.
     #[inline]
     pub fn hit(&self, i: usize) -> Option<Hit> {
