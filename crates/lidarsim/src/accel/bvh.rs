@@ -42,14 +42,58 @@ struct Node {
     count: u32,
 }
 
+/// An interior node of the four-wide hierarchy that the traversals use
+/// (collapsed from the binary one the build makes): the boxes of up to four
+/// children as structure of arrays, so that one SSE operation tests one axis
+/// of all four. An unused slot holds an empty box (lower bound +∞, upper
+/// −∞), which no box test enters.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Node4 {
+    /// The box planes, `planes[row][slot]`: rows 0–2 the lower bounds on
+    /// x, y, z, rows 3–5 the upper ones.
+    planes: [[f32; 4]; 6],
+    /// Interior child: its index in the node array. Leaf: the index of its
+    /// first primitive in `order`.
+    child: [u32; 4],
+    /// 0 for an interior child (or an unused slot), else the number of
+    /// primitives of the leaf.
+    count: [u32; 4],
+}
+
+impl Node4 {
+    /// No children: every slot empty.
+    const EMPTY: Self = Self {
+        planes: [
+            [f32::INFINITY; 4],
+            [f32::INFINITY; 4],
+            [f32::INFINITY; 4],
+            [f32::NEG_INFINITY; 4],
+            [f32::NEG_INFINITY; 4],
+            [f32::NEG_INFINITY; 4],
+        ],
+        child: [0; 4],
+        count: [0; 4],
+    };
+}
+
+/// A child waiting on a traversal stack: the distance at which the ray or
+/// bundle enters its box, and the child as its parent's slot names it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Pending {
+    t: f32,
+    child: u32,
+    count: u32,
+}
+
 /// Size figures of a built hierarchy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BvhStats {
-    /// Number of nodes.
+    /// Number of (four-wide) interior nodes.
     pub nodes: usize,
     /// Number of leaves.
     pub leaves: usize,
-    /// Depth of the deepest leaf (root = 1).
+    /// Interior nodes on the longest path from the root to a leaf.
     pub max_depth: usize,
 }
 
@@ -57,9 +101,12 @@ pub struct BvhStats {
 #[derive(Debug)]
 pub struct Bvh {
     scene: Scene,
-    nodes: Vec<Node>,
+    /// Four-wide interior nodes; the root is the first.
+    nodes: Vec<Node4>,
     /// Primitive indices in leaf order.
     order: Vec<u32>,
+    /// Traversal stack entries that the deepest path can need.
+    stack_len: usize,
     origin: DVec3,
     /// Absolute padding of node boxes, m.
     pad: f64,
@@ -106,6 +153,7 @@ impl Bvh {
             scene: Scene::default(),
             nodes: Vec::new(),
             order: Vec::new(),
+            stack_len: 0,
             origin,
             pad,
         };
@@ -118,9 +166,15 @@ impl Bvh {
             // The root's descendants start at index 1.
             shift(&mut nodes, 1);
         }
+        drop(prims);
+        let (wide, depth) = collapse(&nodes);
+        drop(nodes);
         bvh.scene = scene;
-        bvh.nodes = nodes;
+        bvh.nodes = wide;
         bvh.order = order;
+        // Each node visited leaves at most three of its children on the
+        // stack; the fourth is visited next (pushed, then popped).
+        bvh.stack_len = 3 * depth + 4;
         bvh
     }
 
@@ -240,21 +294,23 @@ impl Bvh {
         }
         let mut stack = vec![(0usize, 1usize)];
         while let Some((i, d)) = stack.pop() {
-            let n = &self.nodes[i];
             s.max_depth = s.max_depth.max(d);
-            if n.count > 0 {
-                s.leaves += 1;
-            } else {
-                stack.push((n.left_or_first as usize, d + 1));
-                stack.push((n.left_or_first as usize + 1, d + 1));
+            let n = &self.nodes[i];
+            for slot in 0..4 {
+                if n.count[slot] > 0 {
+                    s.leaves += 1;
+                } else if n.planes[0][slot] <= n.planes[3][slot] {
+                    stack.push((n.child[slot] as usize, d + 1));
+                }
             }
         }
         s
     }
 
     /// Checks the structural invariants: every primitive in exactly one
-    /// leaf, every primitive's box inside all boxes on its path. Returns a
-    /// description of the first violation.
+    /// leaf, every primitive's box inside all boxes on its path, every node
+    /// reached once, the stack deep enough. Returns a description of the
+    /// first violation.
     pub fn validate(&self) -> Result<(), String> {
         let n = self.scene.primitives.len();
         let mut seen = vec![0u32; n];
@@ -265,58 +321,130 @@ impl Bvh {
                 Err("no nodes".into())
             };
         }
-        let mut stack = vec![(0usize, 0usize)];
-        while let Some((i, depth)) = stack.pop() {
-            if depth > STACK {
-                return Err(format!("depth {depth} exceeds the traversal stack"));
+        let mut reached = vec![0u32; self.nodes.len()];
+        // (node, the boxes of its ancestors' slots on the path to it)
+        let mut stack = vec![(0usize, Vec::<Aabb>::new())];
+        while let Some((i, path)) = stack.pop() {
+            reached[i] += 1;
+            if 3 * (path.len() + 1) + 4 > self.stack_len {
+                return Err(format!("node {i} is deeper than the traversal stack"));
             }
             let node = self.nodes[i];
-            let node_box = Aabb {
-                min: DVec3::new(node.min[0] as f64, node.min[1] as f64, node.min[2] as f64)
-                    + self.origin,
-                max: DVec3::new(node.max[0] as f64, node.max[1] as f64, node.max[2] as f64)
-                    + self.origin,
-            };
-            let check = |prim: u32| -> Result<(), String> {
-                let b = self.scene.primitives[prim as usize].bounds();
-                if node_box.contains(b.min, 0.0) && node_box.contains(b.max, 0.0) {
-                    Ok(())
-                } else {
-                    Err(format!("primitive {prim} sticks out of node {i}"))
+            for slot in 0..4 {
+                let lo = [0, 1, 2].map(|a| node.planes[a][slot] as f64);
+                let hi = [0, 1, 2].map(|a| node.planes[3 + a][slot] as f64);
+                if lo[0] > hi[0] {
+                    if node.count[slot] > 0 {
+                        return Err(format!("empty slot {slot} of node {i} holds a leaf"));
+                    }
+                    continue;
                 }
-            };
-            if node.count > 0 {
-                let first = node.left_or_first as usize;
-                for &p in &self.order[first..first + node.count as usize] {
-                    check(p)?;
+                let slot_box = Aabb {
+                    min: DVec3::from(lo) + self.origin,
+                    max: DVec3::from(hi) + self.origin,
+                };
+                let mut path = path.clone();
+                path.push(slot_box);
+                if node.count[slot] == 0 {
+                    let c = node.child[slot] as usize;
+                    if c == 0 || c >= self.nodes.len() {
+                        return Err(format!("node {i} names node {c}"));
+                    }
+                    stack.push((c, path));
+                    continue;
+                }
+                let first = node.child[slot] as usize;
+                let Some(prims) = self.order.get(first..first + node.count[slot] as usize) else {
+                    return Err(format!("leaf in node {i} runs past the order"));
+                };
+                for &p in prims {
+                    let b = self.scene.primitives[p as usize].bounds();
+                    if let Some(k) = path
+                        .iter()
+                        .position(|pb| !(pb.contains(b.min, 0.0) && pb.contains(b.max, 0.0)))
+                    {
+                        return Err(format!(
+                            "primitive {p} sticks out of the box {k} levels above it"
+                        ));
+                    }
                     seen[p as usize] += 1;
                 }
-            } else {
-                let first = node.left_or_first as usize;
-                for child in [first, first + 1] {
-                    // Every primitive under a child must be in this box too.
-                    let mut sub = vec![child];
-                    while let Some(c) = sub.pop() {
-                        let cn = self.nodes[c];
-                        if cn.count > 0 {
-                            let f = cn.left_or_first as usize;
-                            for &p in &self.order[f..f + cn.count as usize] {
-                                check(p)?;
-                            }
-                        } else {
-                            sub.push(cn.left_or_first as usize);
-                            sub.push(cn.left_or_first as usize + 1);
-                        }
-                    }
-                    stack.push((child, depth + 1));
-                }
             }
+        }
+        if let Some(i) = reached.iter().position(|&c| c != 1) {
+            return Err(format!("node {i} is reached {} times", reached[i]));
         }
         match seen.iter().position(|&c| c != 1) {
             Some(p) => Err(format!("primitive {p} is in {} leaves", seen[p])),
             None => Ok(()),
         }
     }
+}
+
+/// The four-wide hierarchy of a binary one (root first, children of an
+/// interior node adjacent): each four-wide node takes a binary node's two
+/// children and, while it has fewer than four, replaces its interior child
+/// with the largest box by that child's two children. Returns the nodes and
+/// the number of them on the longest path from the root.
+fn collapse(bin: &[Node]) -> (Vec<Node4>, usize) {
+    let mut wide = Vec::new();
+    if bin.is_empty() {
+        return (wide, 0);
+    }
+    let area = |n: &Node| {
+        let e = [0, 1, 2].map(|a| (n.max[a] - n.min[a]) as f64);
+        e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+    };
+    wide.reserve_exact(bin.len() / 3 + 1);
+    wide.push(Node4::EMPTY);
+    let mut depth = 0;
+    // (binary node, its four-wide node, depth)
+    let mut work = vec![(0usize, 0usize, 1usize)];
+    while let Some((b, w, d)) = work.pop() {
+        depth = depth.max(d);
+        let mut kids = [0usize; 4];
+        let mut len = if bin[b].count > 0 {
+            // A root that is a leaf: the only child.
+            kids[0] = b;
+            1
+        } else {
+            let l = bin[b].left_or_first as usize;
+            kids[..2].copy_from_slice(&[l, l + 1]);
+            2
+        };
+        while len < 4 {
+            let mut open: Option<(usize, f64)> = None;
+            for (i, &k) in kids[..len].iter().enumerate() {
+                if bin[k].count == 0 && open.is_none_or(|(_, a)| area(&bin[k]) > a) {
+                    open = Some((i, area(&bin[k])));
+                }
+            }
+            let Some((i, _)) = open else { break };
+            let l = bin[kids[i]].left_or_first as usize;
+            kids.copy_within(i + 1..len, i + 2);
+            kids[i] = l;
+            kids[i + 1] = l + 1;
+            len += 1;
+        }
+        let mut node = Node4::EMPTY;
+        for (slot, &k) in kids[..len].iter().enumerate() {
+            let n = &bin[k];
+            for a in 0..3 {
+                node.planes[a][slot] = n.min[a];
+                node.planes[3 + a][slot] = n.max[a];
+            }
+            if n.count > 0 {
+                node.child[slot] = n.left_or_first;
+                node.count[slot] = n.count;
+            } else {
+                node.child[slot] = wide.len() as u32;
+                work.push((k, wide.len(), d + 1));
+                wide.push(Node4::EMPTY);
+            }
+        }
+        wide[w] = node;
+    }
+    (wide, depth)
 }
 
 /// Largest f32 not above `x`.
@@ -449,15 +577,22 @@ impl Bvh {
         let inv = [inv(ray.dir.x), inv(ray.dir.y), inv(ray.dir.z)];
         let mut best_t = t_max;
         let mut best: Option<u32> = None;
-        let mut stack = [0u32; STACK];
+        let mut small = [Pending::default(); STACK];
+        let mut big = Vec::new();
+        let stack: &mut [Pending] = if self.stack_len <= STACK {
+            &mut small
+        } else {
+            big.resize(self.stack_len, Pending::default());
+            &mut big
+        };
         let mut sp = 0usize;
-        let mut node = 0usize;
+        // The root: an interior node.
+        let (mut child, mut count) = (0u32, 0u32);
         let slack = |t: f64| (t + self.pad) as f32 * (1.0 + 1e-6);
         loop {
-            let n = &self.nodes[node];
-            if n.count > 0 {
-                let first = n.left_or_first as usize;
-                for &p in &self.order[first..first + n.count as usize] {
+            if count > 0 {
+                let first = child as usize;
+                for &p in &self.order[first..first + count as usize] {
                     let prim = &self.scene.primitives[p as usize];
                     if prim.is_volume() {
                         if let Some(s) = spans.as_deref_mut()
@@ -473,31 +608,22 @@ impl Bvh {
                     }
                 }
             } else {
-                let l = n.left_or_first as usize;
-                let tl = slab(&self.nodes[l], &o, &inv, slack(best_t));
-                let tr = slab(&self.nodes[l + 1], &o, &inv, slack(best_t));
-                match (tl, tr) {
-                    (Some(a), Some(b)) => {
-                        let (near, far) = if a <= b { (l, l + 1) } else { (l + 1, l) };
-                        if sp < STACK {
-                            stack[sp] = far as u32;
-                            sp += 1;
-                        }
-                        node = near;
-                        continue;
+                let n = &self.nodes[child as usize];
+                let limit = slack(best_t);
+                let base = sp;
+                for slot in 0..4 {
+                    if let Some(t) = slab(n, slot, &o, &inv, limit) {
+                        stack[sp] = Pending {
+                            t,
+                            child: n.child[slot],
+                            count: n.count[slot],
+                        };
+                        sp += 1;
                     }
-                    (Some(_), None) => {
-                        node = l;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = l + 1;
-                        continue;
-                    }
-                    (None, None) => {}
                 }
+                nearest_on_top(&mut stack[base..sp]);
             }
-            // Pop the next node still worth visiting.
+            // Pop the next child still worth visiting.
             loop {
                 if sp == 0 {
                     if let Some(s) = spans {
@@ -506,13 +632,31 @@ impl Bvh {
                     return best.map(|p| make_hit(&self.scene, p, ray, best_t));
                 }
                 sp -= 1;
-                let cand = stack[sp] as usize;
-                if slab(&self.nodes[cand], &o, &inv, slack(best_t)).is_some() {
-                    node = cand;
+                let next = stack[sp];
+                if next.t <= slack(best_t) {
+                    (child, count) = (next.child, next.count);
                     break;
                 }
             }
         }
+    }
+}
+
+/// Orders the children just pushed on a traversal stack so that the
+/// nearest is on top (last), the lower slot above among equally near ones.
+/// A child popped later is visited only if its entry distance is still
+/// within the closest hit: its box test then passes, as its exit was beyond
+/// its entry when it was pushed.
+#[inline]
+fn nearest_on_top(run: &mut [Pending]) {
+    for i in 1..run.len() {
+        let e = run[i];
+        let mut j = i;
+        while j > 0 && run[j - 1].t <= e.t {
+            run[j] = run[j - 1];
+            j -= 1;
+        }
+        run[j] = e;
     }
 }
 
@@ -571,17 +715,16 @@ impl RayCaster for Bvh {
         // The traversal stack lives in the trace: sized once, never cleared
         // (every entry is written before it is read).
         let mut stack = std::mem::take(&mut out.stack);
-        stack.resize(STACK, 0);
-        let mut sp = 0usize;
-        let mut node = 0usize;
-        if bundle.enters(&self.nodes[0], slack(far)).is_none() {
-            sp = usize::MAX;
+        if stack.len() < self.stack_len {
+            stack.resize(self.stack_len, Pending::default());
         }
-        while sp != usize::MAX {
-            let n = &self.nodes[node];
-            if n.count > 0 {
-                let first = n.left_or_first as usize;
-                for &p in &self.order[first..first + n.count as usize] {
+        let mut sp = 0usize;
+        // The root: an interior node.
+        let (mut child, mut count) = (0u32, 0u32);
+        'visit: loop {
+            if count > 0 {
+                let first = child as usize;
+                for &p in &self.order[first..first + count as usize] {
                     let prim = &self.scene.primitives[p as usize];
                     if prim.is_volume() {
                         volumes.push(p);
@@ -608,41 +751,65 @@ impl RayCaster for Bvh {
                         .fold(0.0f64, |m, b| if b.0 > m { b.0 } else { m });
                 }
             } else {
-                let l = n.left_or_first as usize;
-                let pair = <&[Node; 2]>::try_from(&self.nodes[l..l + 2]).expect("two children");
-                match bundle.enters_pair(pair, slack(far)) {
-                    (Some(a), Some(b)) => {
-                        let (near, farther) = if a <= b { (l, l + 1) } else { (l + 1, l) };
-                        if sp < STACK {
-                            stack[sp] = farther as u32;
-                            sp += 1;
-                        }
-                        node = near;
-                        continue;
-                    }
-                    (Some(_), None) => {
-                        node = l;
-                        continue;
-                    }
-                    (None, Some(_)) => {
-                        node = l + 1;
-                        continue;
-                    }
-                    (None, None) => {}
+                let n = &self.nodes[child as usize];
+                let (mask, t) = bundle.enters4(n, slack(far));
+                // One child entered (the usual case on the way down): to
+                // it directly, by a branch per slot, so that the processor
+                // can run ahead into it.
+                let only = match mask {
+                    0b0001 => Some(0),
+                    0b0010 => Some(1),
+                    0b0100 => Some(2),
+                    0b1000 => Some(3),
+                    _ => None,
+                };
+                if let Some(slot) = only {
+                    (child, count) = (n.child[slot], n.count[slot]);
+                    continue 'visit;
                 }
+                // Two: the farther waits on the stack.
+                let two = match mask {
+                    0b0011 => Some((0, 1)),
+                    0b0101 => Some((0, 2)),
+                    0b1001 => Some((0, 3)),
+                    0b0110 => Some((1, 2)),
+                    0b1010 => Some((1, 3)),
+                    0b1100 => Some((2, 3)),
+                    _ => None,
+                };
+                if let Some((i, j)) = two {
+                    let (near, farther) = if t[i] <= t[j] { (i, j) } else { (j, i) };
+                    stack[sp] = Pending {
+                        t: t[farther],
+                        child: n.child[farther],
+                        count: n.count[farther],
+                    };
+                    sp += 1;
+                    (child, count) = (n.child[near], n.count[near]);
+                    continue 'visit;
+                }
+                let base = sp;
+                for (slot, &t) in t.iter().enumerate() {
+                    if mask & (1 << slot) != 0 {
+                        stack[sp] = Pending {
+                            t,
+                            child: n.child[slot],
+                            count: n.count[slot],
+                        };
+                        sp += 1;
+                    }
+                }
+                nearest_on_top(&mut stack[base..sp]);
             }
-            loop {
-                if sp == 0 {
-                    sp = usize::MAX;
-                    break;
-                }
+            while sp > 0 {
                 sp -= 1;
-                let cand = stack[sp] as usize;
-                if bundle.enters(&self.nodes[cand], slack(far)).is_some() {
-                    node = cand;
-                    break;
+                let next = stack[sp];
+                if next.t <= slack(far) {
+                    (child, count) = (next.child, next.count);
+                    continue 'visit;
                 }
             }
+            break;
         }
         out.stack = stack;
         // Triangle hits carry their normal, already facing the ray, from the
@@ -839,7 +1006,7 @@ impl Bundle {
         let o = [o.x as f32, o.y as f32, o.z as f32];
         let bundle = Self {
             #[cfg(target_arch = "x86_64")]
-            simd: sse::BundleLanes::new(o, sign, inv_lo, inv_hi),
+            simd: sse::BundleLanes::new(o, inv_lo, inv_hi),
             o,
             sign,
             inv_lo,
@@ -848,120 +1015,87 @@ impl Bundle {
         (bundle, sum)
     }
 
-    /// A lower bound of the distance at which some ray of the bundle enters
-    /// the node's box, if any can before `t_max`.
+    /// The children of `n` that some ray of the bundle can enter before
+    /// `t_max`: bit `slot` of the mask set for each, and per slot a lower
+    /// bound of the distance at which it does (see [`Bundle::enters_box`]).
+    #[inline]
+    fn enters4(&self, n: &Node4, t_max: f32) -> (u32, [f32; 4]) {
+        #[cfg(target_arch = "x86_64")]
+        {
+            self.simd.enters4(n, self.sign, t_max)
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            self.enters4_scalar(n, t_max)
+        }
+    }
+
+    /// [`Bundle::enters4`] one slot at a time.
+    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    fn enters4_scalar(&self, n: &Node4, t_max: f32) -> (u32, [f32; 4]) {
+        let mut mask = 0;
+        let mut t = [0.0; 4];
+        for (slot, t) in t.iter_mut().enumerate() {
+            let lo = [0, 1, 2].map(|a| n.planes[a][slot]);
+            let hi = [0, 1, 2].map(|a| n.planes[3 + a][slot]);
+            let (enters, t0) = self.enters_box(lo, hi, t_max);
+            mask |= u32::from(enters) << slot;
+            *t = t0;
+        }
+        (mask, t)
+    }
+
+    /// Whether some ray of the bundle can enter the box `[lo, hi]` (relative
+    /// to the hierarchy's origin) before `t_max`, and a lower bound of the
+    /// distance at which it does (the definition; the SSE form computes the
+    /// same products, minima and maxima).
     ///
     /// On each axis a ray `o + t·d` (t ≥ 0) with `lo ≤ d ≤ hi` is inside the
     /// slab `[min, max]` only if `t·hi ≥ min − o` and `t·lo ≤ max − o`; each
     /// condition bounds `t` from below or above depending on the sign of
-    /// `hi` and `lo`.
+    /// `hi` and `lo`. An empty box (`lo` = +∞, `hi` = −∞) is entered by
+    /// no ray.
     #[inline]
-    fn enters(&self, n: &Node, t_max: f32) -> Option<f32> {
-        #[cfg(target_arch = "x86_64")]
-        {
-            self.simd.enters(n, t_max)
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            self.enters_scalar(n, t_max)
-        }
-    }
-
-    /// [`Bundle::enters`] for two sibling nodes (adjacent in the array),
-    /// with AVX both at once.
-    #[inline]
-    fn enters_pair(&self, pair: &[Node; 2], t_max: f32) -> (Option<f32>, Option<f32>) {
-        #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-        {
-            self.simd.enters_pair(pair, t_max)
-        }
-        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
-        {
-            (self.enters(&pair[0], t_max), self.enters(&pair[1], t_max))
-        }
-    }
-
-    /// [`Bundle::enters`] one axis at a time (the definition; the SSE form
-    /// computes the same products and so the same answer).
-    #[inline]
-    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-    fn enters_scalar(&self, n: &Node, t_max: f32) -> Option<f32> {
+    fn enters_box(&self, lo: [f32; 3], hi: [f32; 3], t_max: f32) -> (bool, f32) {
         let mut t0 = 0.0f32;
         let mut t1 = t_max;
         for a in 0..3 {
-            let below = n.min[a] - self.o[a];
-            let above = n.max[a] - self.o[a];
+            let below = (lo[a] - self.o[a]) * self.inv_hi[a];
+            let above = (hi[a] - self.o[a]) * self.inv_lo[a];
             match self.sign[a] {
                 Sign::Positive => {
-                    t0 = t0.max(below * self.inv_hi[a]);
-                    t1 = t1.min(above * self.inv_lo[a]);
+                    t0 = t0.max(below);
+                    t1 = t1.min(above);
                 }
                 Sign::Negative => {
-                    t0 = t0.max(above * self.inv_lo[a]);
-                    t1 = t1.min(below * self.inv_hi[a]);
+                    t0 = t0.max(above);
+                    t1 = t1.min(below);
                 }
                 Sign::Straddles => {
-                    t0 = t0.max(below * self.inv_hi[a]).max(above * self.inv_lo[a]);
+                    t0 = t0.max(below).max(above);
                 }
             }
         }
-        (t0 <= t1).then_some(t0)
+        (t0 <= t1, t0)
     }
 }
 
-/// The bundle box test with the three axes in the lanes of one SSE
-/// register (SSE2, part of every x86-64 processor).
+/// The bundle box test on the four children of a node at once, one child
+/// per lane of SSE registers (SSE2, part of every x86-64 processor), and
+/// the AVX direction bounds.
 #[cfg(target_arch = "x86_64")]
 mod sse {
     #[cfg(target_feature = "avx")]
     use super::DVec3;
-    use super::{Node, Sign};
+    use super::{Node4, Sign};
     use std::arch::x86_64::*;
 
-    /// The bundle's constants, lane `a` for axis `a`; lane 3 is inert.
+    /// The bundle's constants, per axis, in all four lanes.
     #[derive(Clone, Copy)]
     pub(super) struct BundleLanes {
-        o: __m128,
-        inv_lo: __m128,
-        inv_hi: __m128,
-        /// Lanes where `(min − o)·inv_hi` bounds the entry (positive or
-        /// straddling axes).
-        entry_below: __m128,
-        /// Lanes where `(max − o)·inv_lo` bounds the entry (negative or
-        /// straddling axes).
-        entry_above: __m128,
-        /// Lanes where `(max − o)·inv_lo` bounds the exit (positive axes).
-        exit_above: __m128,
-        /// Lanes where `(min − o)·inv_hi` bounds the exit (negative axes).
-        exit_below: __m128,
-        /// All ones in lanes 0–2.
-        xyz: __m128,
-    }
-
-    fn mask(m: [bool; 4]) -> __m128 {
-        let bits = m.map(|b| if b { -1i32 } else { 0 });
-        // SAFETY: SSE2 is part of the x86-64 baseline.
-        unsafe { _mm_castsi128_ps(_mm_setr_epi32(bits[0], bits[1], bits[2], bits[3])) }
-    }
-
-    fn lanes(v: [f32; 3]) -> __m128 {
-        // SAFETY: SSE2 is part of the x86-64 baseline.
-        unsafe { _mm_setr_ps(v[0], v[1], v[2], 0.0) }
-    }
-
-    /// The smaller of an exit bound and the distance limit: a comparison
-    /// rather than `f32::min`, as neither is NaN (finite box corners and
-    /// reciprocals, infinities only from the inert lanes).
-    #[inline(always)]
-    fn below_limit(t1: f32, t_max: f32) -> f32 {
-        if t1 < t_max { t1 } else { t_max }
-    }
-
-    /// `a` where `m` is set, else `b`.
-    #[inline(always)]
-    fn select(m: __m128, a: __m128, b: __m128) -> __m128 {
-        // SAFETY: SSE2 is part of the x86-64 baseline.
-        unsafe { _mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)) }
+        o: [__m128; 3],
+        inv_lo: [__m128; 3],
+        inv_hi: [__m128; 3],
     }
 
     /// [`super::direction_bounds`] with the three components of a
@@ -998,119 +1132,51 @@ mod sse {
     }
 
     impl BundleLanes {
-        pub(super) fn new(
-            o: [f32; 3],
-            sign: [Sign; 3],
-            inv_lo: [f32; 3],
-            inv_hi: [f32; 3],
-        ) -> Self {
-            let is = |want: &[Sign]| {
-                let m = sign.map(|s| want.contains(&s));
-                [m[0], m[1], m[2], false]
-            };
-            let mut entry_below = is(&[Sign::Positive, Sign::Straddles]);
-            // Lane 3 computes 0·0 = 0: the entry bound t ≥ 0.
-            entry_below[3] = true;
+        pub(super) fn new(o: [f32; 3], inv_lo: [f32; 3], inv_hi: [f32; 3]) -> Self {
+            // SAFETY: SSE2 is part of the x86-64 baseline.
+            let splat = |v: [f32; 3]| v.map(|x| unsafe { _mm_set1_ps(x) });
+            let (inv_lo, inv_hi) = (splat(inv_lo), splat(inv_hi));
             Self {
-                o: lanes(o),
-                inv_lo: lanes(inv_lo),
-                inv_hi: lanes(inv_hi),
-                entry_below: mask(entry_below),
-                entry_above: mask(is(&[Sign::Negative, Sign::Straddles])),
-                exit_above: mask(is(&[Sign::Positive])),
-                exit_below: mask(is(&[Sign::Negative])),
-                xyz: mask([true, true, true, false]),
+                o: splat(o),
+                inv_lo,
+                inv_hi,
             }
         }
 
+        /// [`super::Bundle::enters4`]: per axis the products and the
+        /// minima and maxima of [`super::Bundle::enters_box`], in the same
+        /// order, for the four slots at once.
         #[inline(always)]
-        pub(super) fn enters(&self, n: &Node, t_max: f32) -> Option<f32> {
-            let p = n as *const Node as *const f32;
-            // SAFETY: SSE2 is part of the x86-64 baseline; `Node` is
-            // `repr(C)` with `min` at 0 and `max` at 16 bytes, each followed
-            // by a `u32` that the mask clears, so both loads stay inside the
-            // node.
+        pub(super) fn enters4(&self, n: &Node4, sign: [Sign; 3], t_max: f32) -> (u32, [f32; 4]) {
+            // SAFETY: SSE2 is part of the x86-64 baseline; each load reads
+            // one `[f32; 4]` of the node, 16-byte aligned (the node is
+            // 64-byte aligned and its arrays are 16 bytes each).
             unsafe {
-                let min = _mm_and_ps(_mm_loadu_ps(p), self.xyz);
-                let max = _mm_and_ps(_mm_loadu_ps(p.add(4)), self.xyz);
-                let below = _mm_mul_ps(_mm_sub_ps(min, self.o), self.inv_hi);
-                let above = _mm_mul_ps(_mm_sub_ps(max, self.o), self.inv_lo);
-                let ninf = _mm_set1_ps(f32::NEG_INFINITY);
-                let pinf = _mm_set1_ps(f32::INFINITY);
-                let t0 = _mm_max_ps(
-                    select(self.entry_below, below, ninf),
-                    select(self.entry_above, above, ninf),
-                );
-                let t1 = _mm_min_ps(
-                    select(self.exit_above, above, pinf),
-                    select(self.exit_below, below, pinf),
-                );
-                let t0 = _mm_max_ps(t0, _mm_movehl_ps(t0, t0));
-                let t0 = _mm_max_ss(t0, _mm_shuffle_ps::<0b01>(t0, t0));
-                let t1 = _mm_min_ps(t1, _mm_movehl_ps(t1, t1));
-                let t1 = _mm_min_ss(t1, _mm_shuffle_ps::<0b01>(t1, t1));
-                let t0 = _mm_cvtss_f32(t0);
-                let t1 = below_limit(_mm_cvtss_f32(t1), t_max);
-                (t0 <= t1).then_some(t0)
-            }
-        }
-
-        /// [`BundleLanes::enters`] for two adjacent nodes, one in each
-        /// 128-bit half of AVX registers: the same products, minima and
-        /// maxima, so the same answers.
-        #[cfg(target_feature = "avx")]
-        #[inline(always)]
-        pub(super) fn enters_pair(
-            &self,
-            pair: &[Node; 2],
-            t_max: f32,
-        ) -> (Option<f32>, Option<f32>) {
-            let p = pair.as_ptr() as *const f32;
-            // SAFETY: the build enables AVX (checked by the `cfg`); the two
-            // `repr(C)` nodes are 64 contiguous bytes, read as two 32-byte
-            // halves: each is `min`, a `u32`, `max`, a `u32`, and the mask
-            // clears the `u32` lanes.
-            unsafe {
-                let both = |v: __m128| _mm256_set_m128(v, v);
-                let first = _mm256_loadu_ps(p);
-                let second = _mm256_loadu_ps(p.add(8));
-                let xyz = both(self.xyz);
-                let min = _mm256_and_ps(_mm256_permute2f128_ps::<0x20>(first, second), xyz);
-                let max = _mm256_and_ps(_mm256_permute2f128_ps::<0x31>(first, second), xyz);
-                let o = both(self.o);
-                let below = _mm256_mul_ps(_mm256_sub_ps(min, o), both(self.inv_hi));
-                let above = _mm256_mul_ps(_mm256_sub_ps(max, o), both(self.inv_lo));
-                let ninf = _mm256_set1_ps(f32::NEG_INFINITY);
-                let pinf = _mm256_set1_ps(f32::INFINITY);
-                let pick = |m: __m128, a: __m256, b: __m256| {
-                    let m = both(m);
-                    _mm256_or_ps(_mm256_and_ps(m, a), _mm256_andnot_ps(m, b))
-                };
-                let t0 = _mm256_max_ps(
-                    pick(self.entry_below, below, ninf),
-                    pick(self.entry_above, above, ninf),
-                );
-                let t1 = _mm256_min_ps(
-                    pick(self.exit_above, above, pinf),
-                    pick(self.exit_below, below, pinf),
-                );
-                // Within each half: lanes 2–3 onto 0–1, then lane 1 onto 0.
-                let t0 = _mm256_max_ps(t0, _mm256_shuffle_ps::<0b1110>(t0, t0));
-                let t0 = _mm256_max_ps(t0, _mm256_shuffle_ps::<0b01>(t0, t0));
-                let t1 = _mm256_min_ps(t1, _mm256_shuffle_ps::<0b1110>(t1, t1));
-                let t1 = _mm256_min_ps(t1, _mm256_shuffle_ps::<0b01>(t1, t1));
-                let answer = |t0: __m128, t1: __m128| {
-                    let t0 = _mm_cvtss_f32(t0);
-                    let t1 = below_limit(_mm_cvtss_f32(t1), t_max);
-                    (t0 <= t1).then_some(t0)
-                };
-                (
-                    answer(_mm256_castps256_ps128(t0), _mm256_castps256_ps128(t1)),
-                    answer(
-                        _mm256_extractf128_ps::<1>(t0),
-                        _mm256_extractf128_ps::<1>(t1),
-                    ),
-                )
+                let mut t0 = _mm_setzero_ps();
+                let mut t1 = _mm_set1_ps(t_max);
+                for (a, sign) in sign.iter().enumerate() {
+                    let lo = _mm_load_ps(n.planes[a].as_ptr());
+                    let hi = _mm_load_ps(n.planes[3 + a].as_ptr());
+                    let below = _mm_mul_ps(_mm_sub_ps(lo, self.o[a]), self.inv_hi[a]);
+                    let above = _mm_mul_ps(_mm_sub_ps(hi, self.o[a]), self.inv_lo[a]);
+                    match sign {
+                        Sign::Positive => {
+                            t0 = _mm_max_ps(t0, below);
+                            t1 = _mm_min_ps(t1, above);
+                        }
+                        Sign::Negative => {
+                            t0 = _mm_max_ps(t0, above);
+                            t1 = _mm_min_ps(t1, below);
+                        }
+                        Sign::Straddles => {
+                            t0 = _mm_max_ps(_mm_max_ps(t0, below), above);
+                        }
+                    }
+                }
+                let mask = _mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32;
+                let mut t = [0.0f32; 4];
+                _mm_storeu_ps(t.as_mut_ptr(), t0);
+                (mask, t)
             }
         }
     }
@@ -1125,17 +1191,21 @@ fn inv(d: f64) -> f32 {
     }
 }
 
-/// Entry distance of the ray into the node's box if it enters before
-/// `t_max`.
+/// Entry distance of the ray into the box of `slot` of `n` if it enters
+/// before `t_max` (per axis the near plane by the sign of the reciprocal
+/// direction, so that an empty box is entered by no ray).
 #[inline]
-fn slab(n: &Node, o: &[f32; 3], inv: &[f32; 3], t_max: f32) -> Option<f32> {
+fn slab(n: &Node4, slot: usize, o: &[f32; 3], inv: &[f32; 3], t_max: f32) -> Option<f32> {
     let mut t0 = 0.0f32;
     let mut t1 = t_max;
     for a in 0..3 {
-        let ta = (n.min[a] - o[a]) * inv[a];
-        let tb = (n.max[a] - o[a]) * inv[a];
-        t0 = t0.max(ta.min(tb));
-        t1 = t1.min(ta.max(tb));
+        let (near, far) = if inv[a] >= 0.0 {
+            (n.planes[a][slot], n.planes[3 + a][slot])
+        } else {
+            (n.planes[3 + a][slot], n.planes[a][slot])
+        };
+        t0 = t0.max((near - o[a]) * inv[a]);
+        t1 = t1.min((far - o[a]) * inv[a]);
     }
     (t0 <= t1).then_some(t0)
 }
@@ -1247,7 +1317,8 @@ mod tests {
 
     /// The SSE box test is the scalar one: the same entry distance or the
     /// same miss, for bundles of every sign pattern (positive, negative and
-    /// straddling axes) against boxes all around them.
+    /// straddling axes) against boxes all around them, and empty slots
+    /// entered by none.
     #[test]
     fn bundle_box_test_lanes_match_scalar() {
         let mut s = crate::rng::Stream::new(9, 0, 0, crate::rng::Purpose::Test);
@@ -1280,42 +1351,44 @@ mod tests {
             }
             assert_eq!(direction_bounds_scalar(&dirs).2, sum);
             assert_eq!(bundle_cone(&dirs, sum), crate::scene::bundle_spread(&dirs));
-            // Boxes near the bundle's axis, behind the origin or ahead of it.
-            let near = o + c * (u() * 200.0) + DVec3::new(u(), u(), u()) * 30.0;
-            let size = DVec3::new(u() + 0.5, u() + 0.5, u() + 0.5) * [0.0, 1.0, 20.0][case % 3];
-            let (a, b) = (near - size, near + size);
-            let node = Node {
-                min: [a.x as f32, a.y as f32, a.z as f32],
-                left_or_first: u32::MAX,
-                max: [b.x as f32, b.y as f32, b.z as f32],
-                count: 7,
-            };
-            let t_max = [1e3f32, 60.0][case % 2];
-            let want = bundle.enters_scalar(&node, t_max);
-            assert_eq!(bundle.enters(&node, t_max), want, "case {case}");
-            // The pair test answers for both nodes in either order.
-            let other = Node {
-                min: [a.x as f32 - 5.0, a.y as f32, a.z as f32 + 3.0],
-                left_or_first: 0,
-                max: [b.x as f32, b.y as f32 + 4.0, b.z as f32 + 3.0],
-                count: 0,
-            };
-            let want_other = bundle.enters_scalar(&other, t_max);
-            assert_eq!(
-                bundle.enters_pair(&[node, other], t_max),
-                (want, want_other)
-            );
-            assert_eq!(
-                bundle.enters_pair(&[other, node], t_max),
-                (want_other, want)
-            );
-            if want.is_some() {
-                entered += 1;
-            } else {
-                missed += 1;
+            // Boxes near the bundle's axis, behind the origin or ahead of it,
+            // in the slots of a node; the last slot of every third node is
+            // left empty.
+            let mut node = Node4::EMPTY;
+            for slot in 0..4 - usize::from(case % 3 == 0) {
+                let near = o + c * (u() * 200.0) + DVec3::new(u(), u(), u()) * 30.0;
+                let size = DVec3::new(u() + 0.5, u() + 0.5, u() + 0.5)
+                    * [0.0, 1.0, 20.0][(case + slot) % 3];
+                let (a, b) = (near - size, near + size);
+                for k in 0..3 {
+                    node.planes[k][slot] = a[k] as f32;
+                    node.planes[3 + k][slot] = b[k] as f32;
+                }
             }
+            let t_max = [1e3f32, 60.0][case % 2];
+            let (mask, t) = bundle.enters4(&node, t_max);
+            for (slot, &t) in t.iter().enumerate() {
+                let lo = [0, 1, 2].map(|k| node.planes[k][slot]);
+                let hi = [0, 1, 2].map(|k| node.planes[3 + k][slot]);
+                let (enters, t0) = bundle.enters_box(lo, hi, t_max);
+                assert_eq!(mask & (1 << slot) != 0, enters, "case {case} slot {slot}");
+                if enters {
+                    assert_eq!(t, t0, "case {case} slot {slot}");
+                    entered += 1;
+                } else {
+                    missed += 1;
+                }
+                if lo[0] > hi[0] {
+                    assert!(!enters, "case {case}: an empty slot is entered");
+                }
+            }
+            assert_eq!(
+                (mask, t),
+                bundle.enters4_scalar(&node, t_max),
+                "case {case}"
+            );
         }
-        assert!(entered > 1000 && missed > 1000, "{entered} {missed}");
+        assert!(entered > 4000 && missed > 4000, "{entered} {missed}");
     }
 
     proptest! {

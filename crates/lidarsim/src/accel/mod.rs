@@ -53,7 +53,7 @@ pub struct PulseTrace {
     /// Working storage of bundle traversals: volumes met by the bundle.
     pub(crate) volumes: Vec<u32>,
     /// Working storage of bundle traversals: the node stack.
-    pub(crate) stack: Vec<u32>,
+    pub(crate) stack: Vec<bvh::Pending>,
 }
 
 /// The primitive number of a sub-ray without a hit in [`PulseTrace`].
