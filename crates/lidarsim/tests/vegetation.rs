@@ -193,12 +193,14 @@ seed = 4
     assert!(foliage > 1000);
     // Trunks are opaque: a sub-ray that meets one returns from it and goes
     // no further (checked ray by ray against the brute-force reference).
+    // The hierarchy puts the primitives in leaf order: the reference and
+    // the loop work on the same order.
     let bvh = Bvh::build(s.scene.clone());
-    let brute = BruteForce::new(s.scene.clone());
+    let brute = BruteForce::new(bvh.scene().clone());
     let mut spans = Vec::new();
     let mut spans_ref = Vec::new();
     let mut trunk_hits = 0;
-    for (i, prim) in s.scene.primitives.iter().enumerate() {
+    for (i, prim) in bvh.scene().primitives.iter().enumerate() {
         let Shape::Trunk(t) = &prim.shape else {
             continue;
         };

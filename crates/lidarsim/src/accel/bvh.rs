@@ -35,7 +35,8 @@ fn shift(nodes: &mut [Node], by: u32) {
 struct Node {
     min: [f32; 3],
     /// Interior: index of the left child (the right one follows it).
-    /// Leaf: index of the first primitive in `order`.
+    /// Leaf: position of its first primitive in the build order (its
+    /// index once the scene's primitives are put in that order).
     left_or_first: u32,
     max: [f32; 3],
     /// 0 for an interior node, else the number of primitives.
@@ -54,7 +55,7 @@ struct Node4 {
     /// x, y, z, rows 3–5 the upper ones.
     planes: [[f32; 4]; 6],
     /// Interior child: its index in the node array. Leaf: the index of its
-    /// first primitive in `order`.
+    /// first primitive (the scene's primitives are in leaf order).
     child: [u32; 4],
     /// 0 for an interior child (or an unused slot), else the number of
     /// primitives of the leaf.
@@ -103,8 +104,6 @@ pub struct Bvh {
     scene: Scene,
     /// Four-wide interior nodes; the root is the first.
     nodes: Vec<Node4>,
-    /// Primitive indices in leaf order.
-    order: Vec<u32>,
     /// Traversal stack entries that the deepest path can need.
     stack_len: usize,
     origin: DVec3,
@@ -124,7 +123,9 @@ impl BuildPrim {
 }
 
 impl Bvh {
-    /// Builds the hierarchy over `scene` (which it then owns).
+    /// Builds the hierarchy over `scene`, which it then owns with its
+    /// primitives reordered so that each leaf's are adjacent: the primitive
+    /// numbers of hits index [`RayCaster::scene`], not the scene given.
     pub fn build(scene: Scene) -> Self {
         let bounds = scene.bounds();
         let origin = if bounds.is_empty() {
@@ -152,7 +153,6 @@ impl Bvh {
         let mut bvh = Self {
             scene: Scene::default(),
             nodes: Vec::new(),
-            order: Vec::new(),
             stack_len: 0,
             origin,
             pad,
@@ -169,9 +169,10 @@ impl Bvh {
         drop(prims);
         let (wide, depth) = collapse(&nodes);
         drop(nodes);
+        let mut scene = scene;
+        in_leaf_order(&mut scene.primitives, order);
         bvh.scene = scene;
         bvh.nodes = wide;
-        bvh.order = order;
         // Each node visited leaves at most three of its children on the
         // stack; the fourth is visited next (pushed, then popped).
         bvh.stack_len = 3 * depth + 4;
@@ -354,11 +355,12 @@ impl Bvh {
                     continue;
                 }
                 let first = node.child[slot] as usize;
-                let Some(prims) = self.order.get(first..first + node.count[slot] as usize) else {
-                    return Err(format!("leaf in node {i} runs past the order"));
-                };
-                for &p in prims {
-                    let b = self.scene.primitives[p as usize].bounds();
+                let leaf = first..first + node.count[slot] as usize;
+                if leaf.end > n {
+                    return Err(format!("leaf in node {i} runs past the primitives"));
+                }
+                for p in leaf {
+                    let b = self.scene.primitives[p].bounds();
                     if let Some(k) = path
                         .iter()
                         .position(|pb| !(pb.contains(b.min, 0.0) && pb.contains(b.max, 0.0)))
@@ -367,7 +369,7 @@ impl Bvh {
                             "primitive {p} sticks out of the box {k} levels above it"
                         ));
                     }
-                    seen[p as usize] += 1;
+                    seen[p] += 1;
                 }
             }
         }
@@ -377,6 +379,26 @@ impl Bvh {
         match seen.iter().position(|&c| c != 1) {
             Some(p) => Err(format!("primitive {p} is in {} leaves", seen[p])),
             None => Ok(()),
+        }
+    }
+}
+
+/// Reorders `prims` in place so that the `i`-th is the one `order[i]` named
+/// (following each cycle of the permutation, without a second copy): the
+/// primitives of a leaf, and of neighbouring leaves, then lie next to each
+/// other in memory, and a leaf names its primitives directly.
+fn in_leaf_order<T>(prims: &mut [T], mut order: Vec<u32>) {
+    const DONE: u32 = u32::MAX;
+    for start in 0..order.len() {
+        let mut at = start;
+        while order[at] != DONE {
+            let from = order[at] as usize;
+            order[at] = DONE;
+            if from == start {
+                break;
+            }
+            prims.swap(at, from);
+            at = from;
         }
     }
 }
@@ -592,8 +614,9 @@ impl Bvh {
         loop {
             if count > 0 {
                 let first = child as usize;
-                for &p in &self.order[first..first + count as usize] {
-                    let prim = &self.scene.primitives[p as usize];
+                for (p, prim) in
+                    (child..).zip(&self.scene.primitives[first..first + count as usize])
+                {
                     if prim.is_volume() {
                         if let Some(s) = spans.as_deref_mut()
                             && let Some(v) = volume_span(prim, p, ray, t_min, best_t)
@@ -698,13 +721,21 @@ impl RayCaster for Bvh {
             self.trace_each(origin, dirs, t_min, t_max, spans, out);
             return;
         }
+        // The previous pulse's hits are overwritten in place, field by
+        // field: filling with the whole tuple (`resize`, `fill`) copies it
+        // through a stack slot, each copy stalled on a load that partly
+        // overlaps the store.
+        let mut best = std::mem::take(&mut out.hits);
         out.clear();
         let (bundle, sum) = Bundle::new(origin - self.origin, dirs);
         let cone = bundle_cone(dirs, sum);
-        let mut best = std::mem::take(&mut out.hits);
         let mut volumes = std::mem::take(&mut out.volumes);
-        best.clear();
         best.resize(dirs.len(), (t_max, NO_HIT, DVec3::NAN));
+        for b in &mut best {
+            b.0 = t_max;
+            b.1 = NO_HIT;
+            b.2 = DVec3::NAN;
+        }
         volumes.clear();
         let mut missing = dirs.len();
         // Whether a hit on a primitive other than a triangle (recorded
@@ -724,8 +755,9 @@ impl RayCaster for Bvh {
         'visit: loop {
             if count > 0 {
                 let first = child as usize;
-                for &p in &self.order[first..first + count as usize] {
-                    let prim = &self.scene.primitives[p as usize];
+                for (p, prim) in
+                    (child..).zip(&self.scene.primitives[first..first + count as usize])
+                {
                     if prim.is_volume() {
                         volumes.push(p);
                         continue;
@@ -1315,6 +1347,29 @@ mod tests {
         scene
     }
 
+    /// The in-place reordering puts at `i` the item `order[i]` named, for
+    /// permutations of every cycle structure.
+    #[test]
+    fn reordering_in_place_follows_the_order() {
+        let mut s = crate::rng::Stream::new(3, 0, 0, crate::rng::Purpose::Test);
+        for n in [0usize, 1, 2, 3, 10, 257] {
+            for _ in 0..20 {
+                let mut order: Vec<u32> = (0..n as u32).collect();
+                // Fisher–Yates, sometimes stopped early (fixed points).
+                let swaps = (s.uniform() * n as f64) as usize;
+                for i in (1..n).rev().take(swaps) {
+                    let j = (s.uniform() * (i + 1) as f64) as usize;
+                    order.swap(i, j.min(i));
+                }
+                let items: Vec<u64> = (0..n as u64).map(|i| 1000 + i * i).collect();
+                let want: Vec<u64> = order.iter().map(|&i| items[i as usize]).collect();
+                let mut got = items.clone();
+                in_leaf_order(&mut got, order);
+                assert_eq!(got, want);
+            }
+        }
+    }
+
     /// The SSE box test is the scalar one: the same entry distance or the
     /// same miss, for bundles of every sign pattern (positive, negative and
     /// straddling axes) against boxes all around them, and empty slots
@@ -1402,8 +1457,10 @@ mod tests {
             // With crowns (per-ray spans), and with polygons but no
             // volumes (normals filled in after the traversal).
             for scene in [scene_with_trees(seed), scene_with_polygons(seed)] {
-                let brute = BruteForce::new(scene.clone());
+                // The hierarchy puts the primitives in leaf order: the
+                // reference works on the same order.
                 let bvh = Bvh::build(scene);
+                let brute = BruteForce::new(bvh.scene().clone());
                 let origin = DVec3::new(ox, oy, 300.0);
                 let c = DVec3::new(dx, dy, -1.0).normalize();
                 let u = c.any_orthonormal_vector();
@@ -1437,8 +1494,8 @@ mod tests {
                                        oy in -150.0..150.0f64, dx in -0.5..0.5f64,
                                        dy in -0.5..0.5f64) {
             let scene = random_scene(seed, 300);
-            let brute = BruteForce::new(scene.clone());
             let bvh = Bvh::build(scene);
+            let brute = BruteForce::new(bvh.scene().clone());
             let ray = Ray::new(DVec3::new(ox, oy, 500.0), DVec3::new(dx, dy, -1.0));
             let a = brute.closest_hit(&ray, 0.0, 1e9);
             let b = bvh.closest_hit(&ray, 0.0, 1e9);
