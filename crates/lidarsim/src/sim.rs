@@ -101,12 +101,12 @@ impl FrameCache {
     /// [`FlightLine::frame`] of `line`.
     fn line(&mut self, line: &FlightLine) -> LineFrame {
         let (a, b) = (line.start_m, line.end_m);
-        let key = [a.x, a.y, a.z, b.x, b.y, b.z].map(f64::to_bits);
+        let key = [a.x, a.y, a.z, b.x, b.y, b.z];
         match self.line {
-            Some((k, frame)) if k == key => frame,
+            Some((k, frame)) if same_bits(&k, &key) => frame,
             _ => {
                 let frame = line.frame();
-                self.line = Some((key, frame));
+                self.line = Some((key.map(f64::to_bits), frame));
                 frame
             }
         }
@@ -129,18 +129,25 @@ impl FrameCache {
             b[6],
             b[7],
             b[8],
-        ]
-        .map(f64::to_bits);
+        ];
         match self.attitude {
-            Some((k, body, rot)) if k == key => (body, rot),
+            Some((k, body, rot)) if same_bits(&k, &key) => (body, rot),
             _ => {
                 let body = attitude.body_to_world();
                 let rot = body * boresight * SCANNER_TO_LEVEL_NORTH;
-                self.attitude = Some((key, body, rot));
+                self.attitude = Some((key.map(f64::to_bits), body, rot));
                 (body, rot)
             }
         }
     }
+}
+
+/// Whether `values` have the bits of `key`, compared one by one (comparing
+/// whole arrays loads the values' fresh stores back wider than they were
+/// written, which stalls).
+#[inline]
+fn same_bits<const N: usize>(key: &[u64; N], values: &[f64; N]) -> bool {
+    key.iter().zip(values).all(|(k, v)| *k == v.to_bits())
 }
 
 impl Scratch {
@@ -412,6 +419,10 @@ impl<'a> Simulator<'a> {
             let hi = echo.last_bin as f64 + 1.0;
             scratch.energy_by_prim.clear();
             let bins = &scratch.waveform.return_bins;
+            // Neighbouring sub-rays mostly meet the same surface: its sum is
+            // kept in `open` (entry, energy) and stored when another surface
+            // comes (each sum still adds in ray order).
+            let mut open: Option<(usize, f64)> = None;
             for ((r, &(p, _)), &b) in scratch
                 .returns
                 .iter()
@@ -421,18 +432,24 @@ impl<'a> Simulator<'a> {
                 if b < lo || b >= hi {
                     continue;
                 }
-                // Neighbouring sub-rays mostly meet the same surface: the
-                // last one added first (each sum still adds in ray order).
-                if let Some((q, e)) = scratch.energy_by_prim.last_mut()
-                    && *q == p
-                {
-                    *e += r.power;
-                    continue;
+                let sums = &mut scratch.energy_by_prim;
+                if let Some((k, e)) = &mut open {
+                    if sums[*k].0 == p {
+                        *e += r.power;
+                        continue;
+                    }
+                    sums[*k].1 = *e;
                 }
-                match scratch.energy_by_prim.iter_mut().find(|(q, _)| *q == p) {
-                    Some((_, e)) => *e += r.power,
-                    None => scratch.energy_by_prim.push((p, r.power)),
-                }
+                open = Some(match sums.iter().position(|(q, _)| *q == p) {
+                    Some(k) => (k, sums[k].1 + r.power),
+                    None => {
+                        sums.push((p, r.power));
+                        (sums.len() - 1, r.power)
+                    }
+                });
+            }
+            if let Some((k, e)) = open {
+                scratch.energy_by_prim[k].1 = e;
             }
             let best = scratch
                 .energy_by_prim
