@@ -142,6 +142,50 @@ impl FrameCache {
     }
 }
 
+/// The surface that put the most energy into an echo: per primitive, the
+/// powers of its sub-ray returns whose bin lies in `[lo, hi)`, added in ray
+/// order; the first to reach the largest sum (in order of first
+/// appearance). `sums` is working storage.
+fn dominant_surface(
+    returns: &[Return],
+    surfaces: &[(u32, DVec3)],
+    bins: &[f64],
+    (lo, hi): (f64, f64),
+    sums: &mut Vec<(u32, f64)>,
+) -> Option<u32> {
+    sums.clear();
+    // Neighbouring sub-rays mostly meet the same surface: its sum is kept
+    // in `open` (entry, energy) and stored when another surface comes (in a
+    // register, not reloaded from the vector for each ray).
+    let mut open: Option<(usize, f64)> = None;
+    for ((r, &(p, _)), &b) in returns.iter().zip(surfaces).zip(bins) {
+        if b < lo || b >= hi {
+            continue;
+        }
+        if let Some((k, e)) = &mut open {
+            if sums[*k].0 == p {
+                *e += r.power;
+                continue;
+            }
+            sums[*k].1 = *e;
+        }
+        open = Some(match sums.iter().position(|(q, _)| *q == p) {
+            Some(k) => (k, sums[k].1 + r.power),
+            None => {
+                sums.push((p, r.power));
+                (sums.len() - 1, r.power)
+            }
+        });
+    }
+    if let Some((k, e)) = open {
+        sums[k].1 = e;
+    }
+    sums.iter()
+        .copied()
+        .reduce(|a, b| if b.1 > a.1 { b } else { a })
+        .map(|(p, _)| p)
+}
+
 /// Whether `values` have the bits of `key`, compared one by one (comparing
 /// whole arrays loads the values' fresh stores back wider than they were
 /// written, which stalls).
@@ -417,47 +461,16 @@ impl<'a> Simulator<'a> {
             let mut incidence_angle_deg = None;
             let lo = echo.first_bin as f64;
             let hi = echo.last_bin as f64 + 1.0;
-            scratch.energy_by_prim.clear();
             let bins = &scratch.waveform.return_bins;
-            // Neighbouring sub-rays mostly meet the same surface: its sum is
-            // kept in `open` (entry, energy) and stored when another surface
-            // comes (each sum still adds in ray order).
-            let mut open: Option<(usize, f64)> = None;
-            for ((r, &(p, _)), &b) in scratch
-                .returns
-                .iter()
-                .zip(&scratch.return_surfaces)
-                .zip(bins)
-            {
-                if b < lo || b >= hi {
-                    continue;
-                }
-                let sums = &mut scratch.energy_by_prim;
-                if let Some((k, e)) = &mut open {
-                    if sums[*k].0 == p {
-                        *e += r.power;
-                        continue;
-                    }
-                    sums[*k].1 = *e;
-                }
-                open = Some(match sums.iter().position(|(q, _)| *q == p) {
-                    Some(k) => (k, sums[k].1 + r.power),
-                    None => {
-                        sums.push((p, r.power));
-                        (sums.len() - 1, r.power)
-                    }
-                });
-            }
-            if let Some((k, e)) = open {
-                scratch.energy_by_prim[k].1 = e;
-            }
-            let best = scratch
-                .energy_by_prim
-                .iter()
-                .copied()
-                .reduce(|a, b| if b.1 > a.1 { b } else { a });
+            let best = dominant_surface(
+                &scratch.returns,
+                &scratch.return_surfaces,
+                bins,
+                (lo, hi),
+                &mut scratch.energy_by_prim,
+            );
             let (classification, object_id, component) = match best {
-                Some((p, _)) => {
+                Some(p) => {
                     // Incidence on the dominant surface: its normal where
                     // the first of its sub-rays in the echo met it.
                     incidence_angle_deg = bins
@@ -793,6 +806,61 @@ impl Timer {
 mod tests {
     use super::*;
     use crate::geometry::{rot_x, rot_y, rot_z};
+
+    /// The dominant surface is the one of the largest sum, the sums taken
+    /// one surface at a time over the returns in the echo's bins, the first
+    /// surface of equal sums winning, for surfaces in runs and interleaved.
+    #[test]
+    fn dominant_surface_has_the_largest_energy() {
+        let mut rng = crate::rng::Stream::new(4, 0, 0, crate::rng::Purpose::Test);
+        let mut sums = Vec::new();
+        let mut checked = 0;
+        for case in 0..5000 {
+            let n = 1 + (rng.uniform() * 30.0) as usize;
+            let kinds = 1 + case % 4;
+            let mut p = 0u32;
+            let (mut returns, mut surfaces, mut bins) = (vec![], vec![], vec![]);
+            for _ in 0..n {
+                // Runs of one surface, sometimes broken.
+                if rng.uniform() < 0.3 {
+                    p = (rng.uniform() * kinds as f64) as u32;
+                }
+                // Powers from a few values, so that sums can tie.
+                let power = [0.25, 0.5, 1.0][(rng.uniform() * 3.0) as usize];
+                returns.push(Return {
+                    range_m: 0.0,
+                    power,
+                });
+                surfaces.push((p, DVec3::Z));
+                bins.push(rng.uniform() * 10.0);
+            }
+            let (lo, hi) = (rng.uniform() * 4.0, 4.0 + rng.uniform() * 6.0);
+            let inside = |i: usize| bins[i] >= lo && bins[i] < hi;
+            // Each surface's sum on its own, in ray order.
+            let mut order: Vec<u32> = vec![];
+            for i in (0..n).filter(|&i| inside(i)) {
+                if !order.contains(&surfaces[i].0) {
+                    order.push(surfaces[i].0);
+                }
+            }
+            let sum_of = |q: u32| {
+                (0..n)
+                    .filter(|&i| inside(i) && surfaces[i].0 == q)
+                    .fold(0.0, |s, i| s + returns[i].power)
+            };
+            let mut want: Option<(u32, f64)> = None;
+            for q in order {
+                let e = sum_of(q);
+                if want.is_none_or(|(_, w)| e > w) {
+                    want = Some((q, e));
+                }
+            }
+            let got = dominant_surface(&returns, &surfaces, &bins, (lo, hi), &mut sums);
+            assert_eq!(got, want.map(|(q, _)| q), "case {case}");
+            checked += usize::from(got.is_some());
+        }
+        assert!(checked > 3000, "{checked}");
+    }
 
     fn line(index: u32, start: DVec3, end: DVec3) -> FlightLine {
         FlightLine {

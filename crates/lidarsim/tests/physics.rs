@@ -255,6 +255,40 @@ fn two_echoes_carry_their_surfaces_classes_and_ranges() {
     }
 }
 
+/// Classes of the single echoes of nadir pulses whose beam axis is
+/// `offset` metres beside the edge of a roof plate 10 cm above the ground
+/// (positive: over the plate), and the numbers of returns.
+fn classes_beside_an_edge(offset: f64) -> Vec<(u8, u8)> {
+    let extra = "[materials.plate]\nreflectance = 0.5\n[[polygon]]\nmaterial = \"plate\"\n\
+                 class = \"roof\"\nvertices_m = [[-50, -50, 0.1], [0, -50, 0.1], [0, 50, 0.1], [-50, 50, 0.1]]\n";
+    // 2 mrad at 500 m: a 1 m footprint; 10 cm apart is one echo.
+    let s = survey(
+        "prf_hz = 20000\nscan_angle_deg = 0\ndivergence_mrad = 2.0\nsubrays = 61",
+        &north_line(-offset, -5.0, 5.0, 500.0, 50.0),
+        extra,
+    );
+    simulate(&s, 1)
+        .iter()
+        .map(|p| (p.classification, p.number_of_returns))
+        .collect()
+}
+
+#[test]
+fn an_echo_from_two_surfaces_takes_the_class_of_the_stronger() {
+    // Same material, nearly the same range: the surface under more of the
+    // beam returns more energy. A quarter of the footprint's diameter past
+    // the edge leaves about 80 % of a Gaussian beam's energy on one side.
+    for (offset, class) in [(0.25, 6), (-0.25, 2)] {
+        let got = classes_beside_an_edge(offset);
+        assert!(got.len() > 300, "{}", got.len());
+        assert!(
+            got.iter().all(|&(c, n)| c == class && n == 1),
+            "offset {offset}: {:?}",
+            &got[..5]
+        );
+    }
+}
+
 #[test]
 fn one_and_two_threads_give_identical_points() {
     let mut raw = lidarsim::demo::demo_survey();
