@@ -12,6 +12,7 @@ use crate::geometry::{Aabb, DVec3, Ray};
 use crate::scene::{
     Coverage, EdgeTest, Primitive, Scene, Shape, Triangle, TriangleFan, bundle_cone,
 };
+use rayon::prelude::*;
 
 const MAX_LEAF: usize = 4;
 const BINS: usize = 16;
@@ -127,7 +128,14 @@ impl Bvh {
     /// primitives reordered so that each leaf's are adjacent: the primitive
     /// numbers of hits index [`RayCaster::scene`], not the scene given.
     pub fn build(scene: Scene) -> Self {
-        let bounds = scene.bounds();
+        // The primitives' boxes on all threads; the scene's box from them
+        // ([`Scene::bounds`], the same unions in the same order).
+        let prims: Vec<BuildPrim> = scene
+            .primitives
+            .par_iter()
+            .map(|p| BuildPrim { bounds: p.bounds() })
+            .collect();
+        let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
         let origin = if bounds.is_empty() {
             DVec3::ZERO
         } else {
@@ -141,14 +149,6 @@ impl Bvh {
         // f32 rounding of box corners and of ray origins far from the scene
         // origin: 1 mm plus a relative margin covers ranges up to ~100 km.
         let pad = 1e-3 + 1e-6 * size;
-        let prims: Vec<BuildPrim> = scene
-            .primitives
-            .iter()
-            .map(|p| {
-                let b = p.bounds();
-                BuildPrim { bounds: b }
-            })
-            .collect();
         let mut order: Vec<u32> = (0..prims.len() as u32).collect();
         let mut bvh = Self {
             scene: Scene::default(),
@@ -192,6 +192,12 @@ impl Bvh {
         let b = order[at..at + count]
             .iter()
             .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds));
+        self.node_over(b, at, count, first)
+    }
+
+    /// The leaf node with box `b` over `count` primitives from `first + at`
+    /// in the whole order.
+    fn node_over(&self, b: Aabb, at: usize, count: usize, first: usize) -> Node {
         let lo = b.min - self.origin - DVec3::splat(self.pad);
         let hi = b.max - self.origin + DVec3::splat(self.pad);
         Node {
@@ -221,7 +227,7 @@ impl Bvh {
             self.sequential(prims, order, first, &mut root, &mut desc);
             return (root, desc);
         }
-        let Some(mid) = split(prims, order) else {
+        let Some((mid, _)) = split(prims, order) else {
             return (root, Vec::new());
         };
         let (lo, hi) = order.split_at_mut(mid);
@@ -267,10 +273,18 @@ impl Bvh {
             };
             let at = node.left_or_first as usize - first;
             let count = node.count as usize;
-            if let Some(mid) = split(prims, &mut order[at..at + count]) {
+            if let Some((mid, halves)) = split(prims, &mut order[at..at + count]) {
                 let left = desc.len();
-                desc.push(self.leaf_node(prims, order, at, mid, first));
-                desc.push(self.leaf_node(prims, order, at + mid, count - mid, first));
+                match halves {
+                    Some((l, r)) => {
+                        desc.push(self.node_over(l, at, mid, first));
+                        desc.push(self.node_over(r, at + mid, count - mid, first));
+                    }
+                    None => {
+                        desc.push(self.leaf_node(prims, order, at, mid, first));
+                        desc.push(self.leaf_node(prims, order, at + mid, count - mid, first));
+                    }
+                }
                 let parent = match item {
                     None => &mut *root,
                     Some(i) => &mut desc[i],
@@ -482,8 +496,10 @@ fn up(x: f64) -> f32 {
 }
 
 /// Partitions `items` by the best binned-SAH plane; returns the size of the
-/// left part, or `None` when the node should stay a leaf.
-fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<usize> {
+/// left part and, when the bins give them, the bounds of the two parts (the
+/// union of their bins' boxes, which is the union of their primitives'),
+/// or `None` when the node should stay a leaf.
+fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<(usize, Option<(Aabb, Aabb)>)> {
     let n = items.len();
     if n <= MAX_LEAF {
         return None;
@@ -557,11 +573,16 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<usize> {
                 ((((c - cb.min[axis]) * scale) as usize).min(BINS - 1)) <= bin
             };
             let mid = partition(items, goes_left);
-            (mid > 0 && mid < n).then_some(mid)
+            let bins = &boxes[axis];
+            let halves = (
+                bins[..=bin].iter().fold(Aabb::EMPTY, |a, b| a.union(*b)),
+                bins[bin + 1..].iter().fold(Aabb::EMPTY, |a, b| a.union(*b)),
+            );
+            (mid > 0 && mid < n).then_some((mid, Some(halves)))
         }
         // All centroids coincide: split the list in halves so that leaves
         // stay small.
-        None => Some(n / 2),
+        None => Some((n / 2, None)),
     }
 }
 
