@@ -275,16 +275,9 @@ impl Bvh {
             let count = node.count as usize;
             if let Some((mid, halves)) = split(prims, &mut order[at..at + count]) {
                 let left = desc.len();
-                match halves {
-                    Some((l, r)) => {
-                        desc.push(self.node_over(l, at, mid, first));
-                        desc.push(self.node_over(r, at + mid, count - mid, first));
-                    }
-                    None => {
-                        desc.push(self.leaf_node(prims, order, at, mid, first));
-                        desc.push(self.leaf_node(prims, order, at + mid, count - mid, first));
-                    }
-                }
+                let (l, r) = halves;
+                desc.push(self.node_over(l, at, mid, first));
+                desc.push(self.node_over(r, at + mid, count - mid, first));
                 let parent = match item {
                     None => &mut *root,
                     Some(i) => &mut desc[i],
@@ -380,7 +373,8 @@ impl Bvh {
                         .position(|pb| !(pb.contains(b.min, 0.0) && pb.contains(b.max, 0.0)))
                     {
                         return Err(format!(
-                            "primitive {p} sticks out of the box {k} levels above it"
+                            "primitive {p} sticks out of the box of its ancestor at depth {}",
+                            k + 1
                         ));
                     }
                     seen[p] += 1;
@@ -496,10 +490,10 @@ fn up(x: f64) -> f32 {
 }
 
 /// Partitions `items` by the best binned-SAH plane; returns the size of the
-/// left part and, when the bins give them, the bounds of the two parts (the
-/// union of their bins' boxes, which is the union of their primitives'),
-/// or `None` when the node should stay a leaf.
-fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<(usize, Option<(Aabb, Aabb)>)> {
+/// left part and the bounds of the two parts (from the bins: the union of
+/// their bins' boxes is the union of their primitives'), or `None` when the
+/// node should stay a leaf.
+fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<(usize, (Aabb, Aabb))> {
     let n = items.len();
     if n <= MAX_LEAF {
         return None;
@@ -578,11 +572,17 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<(usize, Option<(Aabb,
                 bins[..=bin].iter().fold(Aabb::EMPTY, |a, b| a.union(*b)),
                 bins[bin + 1..].iter().fold(Aabb::EMPTY, |a, b| a.union(*b)),
             );
-            (mid > 0 && mid < n).then_some((mid, Some(halves)))
+            (mid > 0 && mid < n).then_some((mid, halves))
         }
         // All centroids coincide: split the list in halves so that leaves
         // stay small.
-        None => Some((n / 2, None)),
+        None => {
+            let bounds = |part: &[u32]| {
+                part.iter()
+                    .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds))
+            };
+            Some((n / 2, (bounds(&items[..n / 2]), bounds(&items[n / 2..]))))
+        }
     }
 }
 
