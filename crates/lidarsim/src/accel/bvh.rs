@@ -22,15 +22,6 @@ const PARALLEL_DEPTH: usize = 4;
 /// Smallest subtree worth a parallel split.
 const PARALLEL_MIN: usize = 20_000;
 
-/// Adds `by` to the child index of every interior node.
-fn shift(nodes: &mut [Node], by: u32) {
-    for n in nodes {
-        if n.count == 0 {
-            n.left_or_first += by;
-        }
-    }
-}
-
 #[derive(Clone, Copy, Debug)]
 #[repr(C)]
 struct Node {
@@ -157,17 +148,19 @@ impl Bvh {
             origin,
             pad,
         };
-        let mut nodes = Vec::new();
-        if !prims.is_empty() {
-            let (root, desc) = bvh.subtree(&prims, &mut order, 0, 0);
-            nodes.reserve_exact(1 + desc.len());
-            nodes.push(root);
-            nodes.extend(desc);
-            // The root's descendants start at index 1.
-            shift(&mut nodes, 1);
+        // The binary tree: the root at 0, its descendants after it, each
+        // subtree's within the room its primitive count bounds (a binary
+        // tree over n primitives has at most 2n − 1 nodes), so that the
+        // subtrees built in parallel write their own parts of one array.
+        let mut nodes = zeroed_nodes((2 * prims.len()).saturating_sub(1));
+        let mut used = 0;
+        if let Some((root, desc)) = nodes.split_first_mut() {
+            let (r, n) = bvh.subtree(&prims, &mut order, 0, 0, desc, 1);
+            *root = r;
+            used = 1 + n;
         }
         drop(prims);
-        let (wide, depth) = collapse(&nodes);
+        let (wide, depth) = collapse(&nodes, used);
         drop(nodes);
         let mut scene = scene;
         in_leaf_order(&mut scene.primitives, order);
@@ -209,61 +202,60 @@ impl Bvh {
     }
 
     /// Builds the subtree over `order` (whose first element is at `first`
-    /// in the whole order). Returns its root and its other nodes; child
-    /// indices of interior nodes count from the start of that list (the
-    /// caller shifts them). The two halves of the top levels are built in
-    /// parallel; the tree is the same as a sequential build's.
+    /// in the whole order). Returns its root and how many nodes it used in
+    /// `desc`, which receives its other nodes (room for `2·len − 2`; its
+    /// first element is node `base` of the whole array, child indices
+    /// count from the start of that array). The two halves of the top
+    /// levels are built in parallel into their own parts of `desc`; the
+    /// tree is the same as a sequential build's.
     fn subtree(
         &self,
         prims: &[BuildPrim],
         order: &mut [u32],
         first: usize,
         depth: usize,
-    ) -> (Node, Vec<Node>) {
+        desc: &mut [Node],
+        base: usize,
+    ) -> (Node, usize) {
         let count = order.len();
         let mut root = self.leaf_node(prims, order, 0, count, first);
         if depth >= PARALLEL_DEPTH || count < PARALLEL_MIN {
-            let mut desc = Vec::with_capacity(2 * count / MAX_LEAF + 2);
-            self.sequential(prims, order, first, &mut root, &mut desc);
-            return (root, desc);
+            let used = self.sequential(prims, order, first, &mut root, desc, base);
+            return (root, used);
         }
         let Some((mid, _)) = split(prims, order) else {
-            return (root, Vec::new());
+            return (root, 0);
         };
         let (lo, hi) = order.split_at_mut(mid);
-        let ((mut lroot, mut ldesc), (mut rroot, mut rdesc)) = rayon::join(
-            || self.subtree(prims, lo, first, depth + 1),
-            || self.subtree(prims, hi, first + mid, depth + 1),
+        // Layout: the two children, then room for the left's descendants,
+        // then for the right's.
+        let (pair, rest) = desc.split_at_mut(2);
+        let (ldesc, rdesc) = rest.split_at_mut(2 * mid - 2);
+        let (lbase, rbase) = (base + 2, base + 2 + ldesc.len());
+        let ((lroot, lused), (rroot, rused)) = rayon::join(
+            || self.subtree(prims, lo, first, depth + 1, ldesc, lbase),
+            || self.subtree(prims, hi, first + mid, depth + 1, rdesc, rbase),
         );
-        // Layout: the two children, then the left's descendants, then the
-        // right's.
-        let left_base = 2;
-        let right_base = 2 + ldesc.len() as u32;
-        shift(std::slice::from_mut(&mut lroot), left_base);
-        shift(&mut ldesc, left_base);
-        shift(std::slice::from_mut(&mut rroot), right_base);
-        shift(&mut rdesc, right_base);
-        let mut nodes = Vec::with_capacity(2 + ldesc.len() + rdesc.len());
-        nodes.push(lroot);
-        nodes.push(rroot);
-        nodes.append(&mut ldesc);
-        nodes.append(&mut rdesc);
-        root.left_or_first = 0;
+        pair[0] = lroot;
+        pair[1] = rroot;
+        root.left_or_first = base as u32;
         root.count = 0;
-        (root, nodes)
+        (root, 2 + lused + rused)
     }
 
     /// Sequential binned-SAH build below `root` (a leaf over all of
-    /// `order`, which may become interior); descendants go to `desc` with
-    /// child indices counted from its start.
+    /// `order`, which may become interior); descendants go to the front of
+    /// `desc` (node `base` of the whole array). Returns how many.
     fn sequential(
         &self,
         prims: &[BuildPrim],
         order: &mut [u32],
         first: usize,
         root: &mut Node,
-        desc: &mut Vec<Node>,
-    ) {
+        desc: &mut [Node],
+        base: usize,
+    ) -> usize {
+        let mut used = 0;
         // Work items: (node, None) for the root, (index in desc) otherwise.
         let mut work: Vec<Option<usize>> = vec![None];
         while let Some(item) = work.pop() {
@@ -274,20 +266,22 @@ impl Bvh {
             let at = node.left_or_first as usize - first;
             let count = node.count as usize;
             if let Some((mid, halves)) = split(prims, &mut order[at..at + count]) {
-                let left = desc.len();
+                let left = used;
                 let (l, r) = halves;
-                desc.push(self.node_over(l, at, mid, first));
-                desc.push(self.node_over(r, at + mid, count - mid, first));
+                desc[left] = self.node_over(l, at, mid, first);
+                desc[left + 1] = self.node_over(r, at + mid, count - mid, first);
+                used += 2;
                 let parent = match item {
                     None => &mut *root,
                     Some(i) => &mut desc[i],
                 };
-                parent.left_or_first = left as u32;
+                parent.left_or_first = (base + left) as u32;
                 parent.count = 0;
                 work.push(Some(left));
                 work.push(Some(left + 1));
             }
         }
+        used
     }
 
     /// Node count, leaf count and depth.
@@ -411,21 +405,45 @@ fn in_leaf_order<T>(prims: &mut [T], mut order: Vec<u32>) {
     }
 }
 
+/// `n` binary nodes, all zero (empty leaves over nothing). Zeroed memory
+/// from the allocator (fresh pages for an array this large) becomes
+/// resident only where the build writes nodes: the room that subtrees
+/// leave unused costs address space, not memory. `vec![node; n]` would
+/// write every element.
+fn zeroed_nodes(n: usize) -> Vec<Node> {
+    if n == 0 {
+        return Vec::new();
+    }
+    let layout = std::alloc::Layout::array::<Node>(n).expect("node array fits the address space");
+    // SAFETY: the layout is non-empty (`n > 0`, `Node` is 32 bytes); all
+    // zero bits are a valid `Node` (its fields are `f32` and `u32`); the
+    // pointer comes from the global allocator with the layout of a
+    // `Vec<Node>` of capacity `n`, all `n` elements initialised.
+    unsafe {
+        let p = std::alloc::alloc_zeroed(layout).cast::<Node>();
+        if p.is_null() {
+            std::alloc::handle_alloc_error(layout);
+        }
+        Vec::from_raw_parts(p, n, n)
+    }
+}
+
 /// The four-wide hierarchy of a binary one (root first, children of an
-/// interior node adjacent): each four-wide node takes a binary node's two
-/// children and, while it has fewer than four, replaces its interior child
-/// with the largest box by that child's two children. Returns the nodes and
-/// the number of them on the longest path from the root.
-fn collapse(bin: &[Node]) -> (Vec<Node4>, usize) {
+/// interior node adjacent) whose nodes reachable from the root number
+/// `used`: each four-wide node takes a binary node's two children and,
+/// while it has fewer than four, replaces its interior child with the
+/// largest box by that child's two children. Returns the nodes and the
+/// number of them on the longest path from the root.
+fn collapse(bin: &[Node], used: usize) -> (Vec<Node4>, usize) {
     let mut wide = Vec::new();
-    if bin.is_empty() {
+    if used == 0 {
         return (wide, 0);
     }
     let area = |n: &Node| {
         let e = [0, 1, 2].map(|a| (n.max[a] - n.min[a]) as f64);
         e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
     };
-    wide.reserve_exact(bin.len() / 3 + 1);
+    wide.reserve_exact(used / 3 + 1);
     wide.push(Node4::EMPTY);
     let mut depth = 0;
     // (binary node, its four-wide node, depth)
@@ -1313,6 +1331,37 @@ mod tests {
         let bvh = Bvh::build(scene);
         bvh.validate().unwrap();
         assert!(bvh.stats().max_depth < STACK);
+    }
+
+    /// A scene large enough for the top levels to be built in parallel,
+    /// each subtree in its own part of the node array: the hierarchy is
+    /// valid and finds what testing every primitive finds.
+    #[test]
+    fn parallel_build_is_valid_and_finds_every_hit() {
+        let n = 3 * PARALLEL_MIN;
+        let bvh = Bvh::build(random_scene(11, n));
+        bvh.validate().unwrap();
+        let stats = bvh.stats();
+        assert!(stats.leaves >= n / MAX_LEAF, "{stats:?}");
+        let brute = BruteForce::new(bvh.scene().clone());
+        let mut s = crate::rng::Stream::new(11, 1, 0, crate::rng::Purpose::Test);
+        let mut hits = 0;
+        for _ in 0..2000 {
+            let o = DVec3::new(
+                s.uniform() * 240.0 - 120.0,
+                s.uniform() * 240.0 - 120.0,
+                500.0,
+            );
+            let d = DVec3::new(s.uniform() - 0.5, s.uniform() - 0.5, -2.0);
+            let ray = Ray::new(o, d);
+            let (a, b) = (
+                brute.closest_hit(&ray, 0.0, 1e9),
+                bvh.closest_hit(&ray, 0.0, 1e9),
+            );
+            assert_eq!(a.map(|h| (h.prim, h.t)), b.map(|h| (h.prim, h.t)));
+            hits += usize::from(a.is_some());
+        }
+        assert!(hits > 500, "{hits}");
     }
 
     /// A triangle soup with trees standing in it.
