@@ -145,12 +145,31 @@ impl FrameCache {
 /// The surface that put the most energy into an echo: per primitive, the
 /// powers of its sub-ray returns whose bin lies in `[lo, hi)`, added in ray
 /// order; the first to reach the largest sum (in order of first
-/// appearance). `sums` is working storage.
+/// appearance). `span` holds the smallest and largest of `bins`: when the
+/// echo's bins hold them all (the usual single echo), no return is tested.
+/// `sums` is working storage.
 fn dominant_surface(
     returns: &[Return],
     surfaces: &[(u32, DVec3)],
     bins: &[f64],
+    span: (f64, f64),
     (lo, hi): (f64, f64),
+    sums: &mut Vec<(u32, f64)>,
+) -> Option<u32> {
+    if lo <= span.0 && span.1 < hi {
+        energy_leader(returns, surfaces, bins, |_| true, sums)
+    } else {
+        energy_leader(returns, surfaces, bins, |b| b >= lo && b < hi, sums)
+    }
+}
+
+/// [`dominant_surface`] over the returns whose bin is `inside`.
+#[inline(always)]
+fn energy_leader(
+    returns: &[Return],
+    surfaces: &[(u32, DVec3)],
+    bins: &[f64],
+    inside: impl Fn(f64) -> bool,
     sums: &mut Vec<(u32, f64)>,
 ) -> Option<u32> {
     sums.clear();
@@ -159,7 +178,7 @@ fn dominant_surface(
     // register, not reloaded from the vector for each ray).
     let mut open: Option<(usize, f64)> = None;
     for ((r, &(p, _)), &b) in returns.iter().zip(surfaces).zip(bins) {
-        if b < lo || b >= hi {
+        if !inside(b) {
             continue;
         }
         if let Some((k, e)) = &mut open {
@@ -466,6 +485,7 @@ impl<'a> Simulator<'a> {
                 &scratch.returns,
                 &scratch.return_surfaces,
                 bins,
+                scratch.waveform.return_span,
                 (lo, hi),
                 &mut scratch.energy_by_prim,
             );
@@ -834,7 +854,17 @@ mod tests {
                 surfaces.push((p, DVec3::Z));
                 bins.push(rng.uniform() * 10.0);
             }
-            let (lo, hi) = (rng.uniform() * 4.0, 4.0 + rng.uniform() * 6.0);
+            // Every fourth window holds all the returns.
+            let (lo, hi) = if case % 4 == 3 {
+                (-rng.uniform(), 10.0 + rng.uniform())
+            } else {
+                (rng.uniform() * 4.0, 4.0 + rng.uniform() * 6.0)
+            };
+            let span = bins
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                    (a.min(x), b.max(x))
+                });
             let inside = |i: usize| bins[i] >= lo && bins[i] < hi;
             // Each surface's sum on its own, in ray order.
             let mut order: Vec<u32> = vec![];
@@ -855,7 +885,7 @@ mod tests {
                     want = Some((q, e));
                 }
             }
-            let got = dominant_surface(&returns, &surfaces, &bins, (lo, hi), &mut sums);
+            let got = dominant_surface(&returns, &surfaces, &bins, span, (lo, hi), &mut sums);
             assert_eq!(got, want.map(|(q, _)| q), "case {case}");
             checked += usize::from(got.is_some());
         }

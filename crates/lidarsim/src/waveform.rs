@@ -139,6 +139,9 @@ pub struct Waveform {
     /// Fractional absolute bin of each return, in the order given
     /// ([`range_to_bin`] of its range, computed once per pulse).
     pub return_bins: Vec<f64>,
+    /// The smallest and the largest of `return_bins` (`(+∞, −∞)` when
+    /// there are none).
+    pub return_span: (f64, f64),
 }
 
 impl Waveform {
@@ -220,6 +223,7 @@ impl Receiver {
         out.background.clear();
         out.impulses.clear();
         out.return_bins.clear();
+        out.return_span = (f64::INFINITY, f64::NEG_INFINITY);
         if returns.is_empty() {
             return;
         }
@@ -236,6 +240,7 @@ impl Receiver {
                 hi = x;
             }
         }
+        out.return_span = (lo, hi);
         let k0 = self.k0 as i64;
         let ka = self.kernel.len() as i64 - 1 - k0;
         let first = lo.floor() as i64 - k0 - GUARD_BINS;
