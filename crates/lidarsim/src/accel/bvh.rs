@@ -10,7 +10,7 @@
 use super::{Hit, NO_HIT, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
 use crate::geometry::{Aabb, DVec3, Ray};
 use crate::scene::{
-    Coverage, EdgeTest, Primitive, Scene, Shape, Triangle, TriangleFan, bundle_cone,
+    Coverage, EdgeTest, Primitive, Scene, Shape, Straddle, Triangle, TriangleFan, bundle_cone,
 };
 use rayon::prelude::*;
 
@@ -767,7 +767,7 @@ impl RayCaster for Bvh {
         let mut best = std::mem::take(&mut out.hits);
         out.clear();
         let (bundle, sum) = Bundle::new(origin - self.origin, dirs);
-        let cone = bundle_cone(dirs, sum);
+        let cone = Cone::new(origin, bundle_cone(dirs, sum));
         let mut volumes = std::mem::take(&mut out.volumes);
         best.resize(dirs.len(), (t_max, NO_HIT, DVec3::NAN));
         for b in &mut best {
@@ -802,7 +802,7 @@ impl RayCaster for Bvh {
                         continue;
                     }
                     if let Shape::Triangle(tri) = &prim.shape {
-                        missing -= bundle_triangle(tri, p, origin, dirs, cone, t_min, &mut best);
+                        missing -= bundle_triangle(tri, p, dirs, &cone, t_min, &mut best);
                         continue;
                     }
                     for (dir, b) in dirs.iter().zip(best.iter_mut()) {
@@ -934,29 +934,80 @@ impl RayCaster for Bvh {
     }
 }
 
-/// Tests all rays of a bundle from `origin` against one triangle (the
-/// arithmetic of [`Triangle::intersect`], its per-origin part done once),
-/// updating `best` (distance, primitive, normal) where the triangle is closer;
-/// returns how many rays got their first hit. `cone` is the bundle's axis
-/// and spread ([`crate::scene::bundle_spread`]): a triangle the whole bundle misses costs
-/// only its edge planes, one it covers skips the per-ray edge tests, and
-/// for one it straddles each ray is tested on the straddled edges only.
+/// The bundle of a pulse as [`TriangleFan::coverage`] sees it: the rays'
+/// origin, and the axis and spread of their directions
+/// ([`crate::scene::bundle_spread`]), also in the lanes of AVX registers
+/// where the build has AVX.
+struct Cone {
+    origin: DVec3,
+    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
+    axis: DVec3,
+    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
+    spread: f64,
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    lanes: sse::ConeLanes,
+}
+
+impl Cone {
+    fn new(origin: DVec3, (axis, spread): (DVec3, f64)) -> Self {
+        Self {
+            origin,
+            axis,
+            spread,
+            #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+            lanes: sse::ConeLanes::new(origin, axis, spread),
+        }
+    }
+
+    /// The fan of `tri` from the bundle's origin with its edge planes only
+    /// ([`TriangleFan::edges`]) and what its coverage leaves to test per ray
+    /// (`None`: every ray passes the edge tests), unless the bundle misses
+    /// the triangle. With AVX the three edges take three lanes
+    /// ([`sse::ConeLanes::fan`]), else [`Cone::fan_scalar`].
+    #[inline(always)]
+    fn fan(&self, tri: &Triangle) -> Option<(TriangleFan, Option<Straddle>)> {
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+        {
+            self.lanes.fan(tri, self.origin)
+        }
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+        {
+            self.fan_scalar(tri)
+        }
+    }
+
+    /// [`Cone::fan`] by [`TriangleFan::edges`] and
+    /// [`TriangleFan::coverage`] (the definition).
+    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
+    #[inline]
+    fn fan_scalar(&self, tri: &Triangle) -> Option<(TriangleFan, Option<Straddle>)> {
+        let fan = TriangleFan::edges(tri, self.origin);
+        match fan.coverage(self.axis, self.spread) {
+            Coverage::None => None,
+            Coverage::All => Some((fan, None)),
+            Coverage::Some(straddle) => Some((fan, Some(straddle))),
+        }
+    }
+}
+
+/// Tests all rays of a bundle against one triangle (the arithmetic of
+/// [`Triangle::intersect`], its per-origin part done once), updating `best`
+/// (distance, primitive, normal) where the triangle is closer; returns how
+/// many rays got their first hit. `cone` is the bundle's origin, axis and
+/// spread: a triangle the whole bundle misses costs only its edge planes,
+/// one it covers skips the per-ray edge tests, and for one it straddles
+/// each ray is tested on the straddled edges only.
 #[inline]
 fn bundle_triangle(
     tri: &Triangle,
     p: u32,
-    origin: DVec3,
     dirs: &[DVec3],
-    cone: (DVec3, f64),
+    cone: &Cone,
     t_min: f64,
     best: &mut [(f64, u32, DVec3)],
 ) -> usize {
-    let mut fan = TriangleFan::edges(tri, origin);
-    let coverage = fan.coverage(cone.0, cone.1);
-    let straddle = match coverage {
-        Coverage::None => return 0,
-        Coverage::All => None,
-        Coverage::Some(straddle) => Some(straddle),
+    let Some((mut fan, straddle)) = cone.fan(tri) else {
+        return 0;
     };
     fan.complete(tri);
     // One loop per kind of test, so that each runs without deciding again.
@@ -1157,7 +1208,7 @@ impl Bundle {
 #[cfg(target_arch = "x86_64")]
 mod sse {
     #[cfg(target_feature = "avx")]
-    use super::DVec3;
+    use super::{Coverage, DVec3, Straddle, Triangle, TriangleFan};
     use super::{Node4, Sign};
     use std::arch::x86_64::*;
 
@@ -1198,6 +1249,113 @@ mod sse {
                 [lo[0], lo[1], lo[2]],
                 [hi[0], hi[1], hi[2]],
                 DVec3::new(sum[0], sum[1], sum[2]),
+            )
+        }
+    }
+
+    /// The per-pulse operands of [`ConeLanes::fan`] in all four lanes: the
+    /// rays' origin, the bundle's axis and its squared spread.
+    #[cfg(target_feature = "avx")]
+    #[derive(Clone, Copy)]
+    pub(super) struct ConeLanes {
+        o: [__m256d; 3],
+        axis: [__m256d; 3],
+        s2: __m256d,
+    }
+
+    #[cfg(target_feature = "avx")]
+    impl ConeLanes {
+        pub(super) fn new(origin: DVec3, axis: DVec3, spread: f64) -> Self {
+            // SAFETY: the build enables AVX (checked by the `cfg`).
+            unsafe {
+                Self {
+                    o: splat3(origin),
+                    axis: splat3(axis),
+                    s2: _mm256_set1_pd(spread * spread),
+                }
+            }
+        }
+
+        /// [`super::Cone::fan_scalar`] with the triangle's three edges in
+        /// three lanes: lane `i` holds corner `i` relative to `origin` and
+        /// the next corner, their cross product (the edge-plane normal
+        /// `a×b`, `b×c`, `c×a`), its product with the axis and its squared
+        /// length, each by the operations of `DVec3::cross` and
+        /// `DVec3::dot` in their order; the comparisons of
+        /// [`TriangleFan::coverage`] give the same coverage, to the bit.
+        #[inline(always)]
+        pub(super) fn fan(
+            &self,
+            tri: &Triangle,
+            origin: DVec3,
+        ) -> Option<(TriangleFan, Option<Straddle>)> {
+            let [v0, v1, v2] = tri.vertices();
+            // SAFETY: the build enables AVX and AVX2 (x86-64-v3, checked by
+            // the `cfg` for AVX; the permutation is AVX2, which every
+            // processor with AVX and the v3 level has); stores go to local
+            // arrays of four `f64`.
+            unsafe {
+                let corners = [
+                    _mm256_setr_pd(v0.x, v1.x, v2.x, 0.0),
+                    _mm256_setr_pd(v0.y, v1.y, v2.y, 0.0),
+                    _mm256_setr_pd(v0.z, v1.z, v2.z, 0.0),
+                ];
+                let p = [0, 1, 2].map(|k| _mm256_sub_pd(corners[k], self.o[k]));
+                // The next corner in each lane: b, c, a.
+                let q = p.map(|r| _mm256_permute4x64_pd::<0b11_00_10_01>(r));
+                let cross = |i: usize, j: usize| {
+                    _mm256_sub_pd(_mm256_mul_pd(p[i], q[j]), _mm256_mul_pd(q[i], p[j]))
+                };
+                let e = [cross(1, 2), cross(2, 0), cross(0, 1)];
+                let w = dot4(&self.axis, &e);
+                let len2 = dot4(&e, &e);
+                let certain =
+                    _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_mul_pd(w, w), _mm256_mul_pd(self.s2, len2));
+                let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(w, _mm256_setzero_pd());
+                let coverage = Coverage::of_edges(
+                    _mm256_movemask_pd(certain) as u8,
+                    _mm256_movemask_pd(positive) as u8,
+                );
+                let straddle = match coverage {
+                    Coverage::None => return None,
+                    Coverage::All => None,
+                    Coverage::Some(straddle) => Some(straddle),
+                };
+                let mut c = [[0.0f64; 4]; 3];
+                for (k, e) in e.iter().enumerate() {
+                    _mm256_storeu_pd(c[k].as_mut_ptr(), *e);
+                }
+                let normal = |i: usize| DVec3::new(c[0][i], c[1][i], c[2][i]);
+                let fan = TriangleFan::from_edges([normal(0), normal(1), normal(2)], v0 - origin);
+                Some((fan, straddle))
+            }
+        }
+    }
+
+    /// The four lanes of `e` in three registers.
+    #[cfg(target_feature = "avx")]
+    #[inline(always)]
+    fn splat3(e: DVec3) -> [__m256d; 3] {
+        // SAFETY: the build enables AVX (checked by the `cfg`).
+        unsafe {
+            [
+                _mm256_set1_pd(e.x),
+                _mm256_set1_pd(e.y),
+                _mm256_set1_pd(e.z),
+            ]
+        }
+    }
+
+    /// `DVec3::dot` of `d` with `e` lane by lane: the same products added in
+    /// the same order, `(d.x·e.x + d.y·e.y) + d.z·e.z`.
+    #[cfg(target_feature = "avx")]
+    #[inline(always)]
+    fn dot4(d: &[__m256d; 3], e: &[__m256d; 3]) -> __m256d {
+        // SAFETY: the build enables AVX (checked by the `cfg`).
+        unsafe {
+            _mm256_add_pd(
+                _mm256_add_pd(_mm256_mul_pd(d[0], e[0]), _mm256_mul_pd(d[1], e[1])),
+                _mm256_mul_pd(d[2], e[2]),
             )
         }
     }
@@ -1514,6 +1672,53 @@ mod tests {
             );
         }
         assert!(entered > 4000 && missed > 4000, "{entered} {missed}");
+    }
+
+    /// The triangle test's edge planes and coverage, three edges in three
+    /// lanes, are the definition's to the bit, for bundles that miss,
+    /// straddle and cover triangles (also degenerate and far ones).
+    #[test]
+    fn triangle_coverage_lanes_match_scalar() {
+        let mut s = crate::rng::Stream::new(12, 0, 0, crate::rng::Purpose::Test);
+        let mut u = move || s.uniform() - 0.5;
+        let mut seen = [0usize; 3];
+        for case in 0..20_000 {
+            let origin = DVec3::new(u(), u(), u()) * 1000.0 + DVec3::Z * 500.0;
+            let axis = DVec3::new(u() * 0.8, u() * 0.8, -1.0).normalize();
+            let spread = [0.0, 1e-4, 0.02, 0.3][case % 4];
+            let cone = Cone::new(origin, (axis, spread));
+            // Corners around the point the axis reaches 500 m away, from
+            // centimetres to tens of metres apart.
+            let at = origin + axis * 500.0;
+            let size = [0.05, 1.0, 30.0][case % 3];
+            let corner = |u: &mut dyn FnMut() -> f64| at + DVec3::new(u(), u(), u() * 0.2) * size;
+            let (a, b) = (corner(&mut u), corner(&mut u));
+            let c = if case % 7 == 0 {
+                a + (b - a) * 0.5
+            } else {
+                corner(&mut u)
+            };
+            let Some(tri) = Triangle::new(a, b, c) else {
+                continue;
+            };
+            let bits = |f: &Option<(TriangleFan, Option<Straddle>)>| {
+                f.map(|(fan, straddle)| {
+                    (
+                        fan.edge_normals()
+                            .map(|e| [e.x, e.y, e.z].map(f64::to_bits)),
+                        straddle,
+                    )
+                })
+            };
+            let want = cone.fan_scalar(&tri);
+            assert_eq!(bits(&cone.fan(&tri)), bits(&want), "case {case}");
+            seen[match want {
+                None => 0,
+                Some((_, None)) => 1,
+                Some((_, Some(_))) => 2,
+            }] += 1;
+        }
+        assert!(seen.iter().all(|&n| n > 1000), "{seen:?}");
     }
 
     proptest! {

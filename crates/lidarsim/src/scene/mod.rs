@@ -215,6 +215,30 @@ pub enum Coverage {
     Some(Straddle),
 }
 
+impl Coverage {
+    /// The coverage given, per edge (bit `i` for `ab`, `bc`, `ca`), whether
+    /// every ray's triple product on it has one sign (`certain`) and, for
+    /// those, whether that sign is positive (`positive`, a subset): two
+    /// certain edges of opposite signs exclude every ray, three of one sign
+    /// admit every ray ([`TriangleFan::coverage`]).
+    #[inline]
+    pub fn of_edges(certain: u8, positive: u8) -> Self {
+        let (certain, positive) = (certain & 0b111, positive & certain & 0b111);
+        let pos = positive.count_ones();
+        let neg = (certain & !positive).count_ones();
+        if pos > 0 && neg > 0 {
+            Coverage::None
+        } else if pos == 3 || neg == 3 {
+            Coverage::All
+        } else {
+            Coverage::Some(Straddle {
+                uncertain: !certain & 0b111,
+                positive: pos > 0,
+            })
+        }
+    }
+}
+
 /// Which edges of a triangle a bundle straddles ([`Coverage::Some`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Straddle {
@@ -287,29 +311,42 @@ impl TriangleFan {
     #[inline]
     pub fn coverage(&self, axis: DVec3, spread: f64) -> Coverage {
         let s2 = spread * spread;
-        let (mut pos, mut neg) = (0, 0);
-        let mut uncertain = 0u8;
+        let (mut certain, mut positive) = (0u8, 0u8);
         for (i, e) in [self.nab, self.nbc, self.nca].into_iter().enumerate() {
             let w = axis.dot(e);
             if w * w > s2 * e.length_squared() {
+                certain |= 1 << i;
                 if w > 0.0 {
-                    pos += 1;
-                } else {
-                    neg += 1;
+                    positive |= 1 << i;
                 }
-            } else {
-                uncertain |= 1 << i;
             }
         }
-        if pos > 0 && neg > 0 {
-            Coverage::None
-        } else if pos == 3 || neg == 3 {
-            Coverage::All
-        } else {
-            Coverage::Some(Straddle {
-                uncertain,
-                positive: pos > 0,
-            })
+        Coverage::of_edges(certain, positive)
+    }
+
+    /// The edge-plane normals `a×b`, `b×c`, `c×a` of the corners relative
+    /// to the origin: a direction passes the edge tests when its products
+    /// with them share their sign ([`TriangleFan::passes`]).
+    #[inline]
+    pub fn edge_normals(&self) -> [DVec3; 3] {
+        [self.nab, self.nbc, self.nca]
+    }
+
+    /// The fan with edge-plane normals `a×b`, `b×c`, `c×a` and first corner
+    /// `a`, the corners taken relative to the origin, as
+    /// [`TriangleFan::edges`] computes them (for a computation of the same
+    /// products elsewhere, four lanes at once); [`TriangleFan::complete`]
+    /// must follow before any intersection.
+    #[inline]
+    pub fn from_edges(edge_normals: [DVec3; 3], a: DVec3) -> Self {
+        let [nab, nbc, nca] = edge_normals;
+        Self {
+            nab,
+            nbc,
+            nca,
+            a,
+            n: DVec3::ZERO,
+            num: 0.0,
         }
     }
 
