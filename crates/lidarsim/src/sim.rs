@@ -15,7 +15,7 @@ use std::sync::mpsc;
 use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
-use crate::accel::{PulseTrace, RayCaster, VolumeSpan};
+use crate::accel::{Hit, PulseTrace, RayCaster, VolumeSpan};
 use crate::canopy::{CanopyConfig, Fate, march};
 use crate::detection::{DetectScratch, Detector, Echo};
 use crate::geometry::{Attitude, DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
@@ -351,7 +351,39 @@ impl<'a> Simulator<'a> {
         let mut canopy_rng: Option<Stream> = None;
         scratch.returns.clear();
         scratch.return_surfaces.clear();
+        // Eq. 2 at the surface a sub-ray hit.
+        let surface = |hit: &Hit, dir: &DVec3, share: f64| {
+            let mat = &scene.materials[scene.primitives[hit.prim as usize].material as usize];
+            let cos_inc = (-dir.dot(hit.normal)).clamp(0.0, 1.0);
+            surface_return(
+                share,
+                hit.t,
+                rn,
+                mat.reflectance,
+                cos_inc,
+                mat.incidence_exponent,
+            )
+        };
+        // Without crowns on any sub-ray's way (the trace recorded no
+        // spans), every sub-ray brings all its energy to its surface: Eq. 2
+        // alone (1 × it, as the canopy's fate gives it, is the same number).
+        let no_crowns = scratch.trace.has_no_spans();
         for (i, (dir, share)) in scratch.dirs.iter().zip(self.pattern.weights()).enumerate() {
+            if no_crowns {
+                let Some(hit) = scratch.trace.hit(i) else {
+                    continue;
+                };
+                let mut power = surface(&hit, dir, *share);
+                if let Some(sp) = &self.speckle {
+                    power *= sp.factor(speckle_rng.get_or_insert_with(|| stream(Purpose::Speckle)));
+                }
+                scratch.returns.push(Return {
+                    range_m: hit.t,
+                    power,
+                });
+                scratch.return_surfaces.push((hit.prim, hit.normal));
+                continue;
+            }
             let spans = scratch.trace.spans_of(i);
             let fate = if spans.is_empty() {
                 Fate::Passed { transmission: 1.0 }
@@ -377,18 +409,7 @@ impl<'a> Simulator<'a> {
                     let Some(hit) = scratch.trace.hit(i) else {
                         continue;
                     };
-                    let prim = &scene.primitives[hit.prim as usize];
-                    let mat = &scene.materials[prim.material as usize];
-                    let cos_inc = (-dir.dot(hit.normal)).clamp(0.0, 1.0);
-                    let power = transmission
-                        * surface_return(
-                            *share,
-                            hit.t,
-                            rn,
-                            mat.reflectance,
-                            cos_inc,
-                            mat.incidence_exponent,
-                        );
+                    let power = transmission * surface(&hit, dir, *share);
                     (hit.t, hit.prim, power, hit.normal)
                 }
             };

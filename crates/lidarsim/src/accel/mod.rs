@@ -92,6 +92,12 @@ impl PulseTrace {
         (prim != NO_HIT).then_some(Hit { t, prim, normal })
     }
 
+    /// True when no sub-ray has a volume span (no crown on its way).
+    #[inline]
+    pub fn has_no_spans(&self) -> bool {
+        self.spans.is_empty()
+    }
+
     /// Volume spans of sub-ray `i`, sorted by entry distance.
     pub fn spans_of(&self, i: usize) -> &[VolumeSpan] {
         match self.ranges.get(i) {
