@@ -369,34 +369,90 @@ fn for_each_maximum(s: &[f64], thr: f64, mut f: impl FnMut(usize)) {
 /// end of `s` (no higher sample lies on that side).
 fn prominence(s: &[f64], p: usize) -> (f64, Option<f64>, Option<f64>) {
     let h = s[p];
-    let mut left_min = h;
-    let mut left_end = true;
-    for i in (0..p).rev() {
-        if s[i] > h {
-            left_end = false;
-            break;
-        }
-        // A comparison rather than `f64::min`: the samples are finite.
-        if s[i] < left_min {
-            left_min = s[i];
-        }
-    }
-    let mut right_min = h;
-    let mut right_end = true;
-    for &v in &s[p + 1..] {
-        if v > h {
-            right_end = false;
-            break;
-        }
-        if v < right_min {
-            right_min = v;
-        }
-    }
+    let (left_min, left_end) = lowest_before_higher(&s[..p], h, Side::Before);
+    let (right_min, right_end) = lowest_before_higher(&s[p + 1..], h, Side::After);
     (
         h - left_min.max(right_min),
         left_end.then_some(left_min),
         right_end.then_some(right_min),
     )
+}
+
+/// Which side of a maximum [`lowest_before_higher`] searches.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Side {
+    /// Samples before it, searched from the last back.
+    Before,
+    /// Samples after it, searched from the first on.
+    After,
+}
+
+/// The lowest of `h` and the samples of `run` met before the first sample
+/// above `h` (searching from the end of `run` next to the maximum), and
+/// whether no sample was above `h`. The samples are finite and never −0,
+/// so the lowest is the same whatever the order in which they are
+/// compared: with AVX, four at a time.
+#[inline]
+fn lowest_before_higher(run: &[f64], h: f64, side: Side) -> (f64, bool) {
+    let mut low = h;
+    // The samples still to search: `run[..end]` before the maximum,
+    // `run[start..]` after it.
+    #[cfg_attr(
+        not(all(target_arch = "x86_64", target_feature = "avx")),
+        allow(unused_mut)
+    )]
+    let (mut start, mut end) = (0, run.len());
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    {
+        use std::arch::x86_64::*;
+        // SAFETY: the build enables AVX (checked by the `cfg`); each load
+        // reads four samples inside `run[start..end]`.
+        unsafe {
+            let hv = _mm256_set1_pd(h);
+            let mut lows = hv;
+            while end - start >= 4 {
+                let at = match side {
+                    Side::Before => end - 4,
+                    Side::After => start,
+                };
+                let v = _mm256_loadu_pd(run.as_ptr().add(at));
+                let higher = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(v, hv)) as u32;
+                if higher != 0 {
+                    // The lanes between the maximum and the higher sample
+                    // nearest to it are left to the scalar search below,
+                    // which stops at that sample.
+                    break;
+                }
+                lows = _mm256_min_pd(lows, v);
+                match side {
+                    Side::Before => end -= 4,
+                    Side::After => start += 4,
+                }
+            }
+            let mut l = [0.0f64; 4];
+            _mm256_storeu_pd(l.as_mut_ptr(), lows);
+            for x in l {
+                if x < low {
+                    low = x;
+                }
+            }
+        }
+    }
+    let rest = &run[start..end];
+    let mut scan = |v: f64| {
+        if v > h {
+            return false;
+        }
+        if v < low {
+            low = v;
+        }
+        true
+    };
+    let reached = match side {
+        Side::Before => rest.iter().rev().all(|&v| scan(v)),
+        Side::After => rest.iter().all(|&v| scan(v)),
+    };
+    (low, reached)
 }
 
 /// Index of the smallest sample in `a..=b` (the first of equals). Samples
@@ -572,6 +628,41 @@ mod tests {
         peaks.truncate(det.config.max_returns);
         // The one-pass selection must also leave the valleys of these peaks.
         peaks
+    }
+
+    #[test]
+    fn prominence_in_lanes_is_the_prominence_one_by_one() {
+        // The definition: both sides searched one sample at a time.
+        let by_definition = |s: &[f64], p: usize| {
+            let h = s[p];
+            let side = |it: &mut dyn Iterator<Item = f64>| {
+                let mut low = h;
+                for v in it {
+                    if v > h {
+                        return (low, false);
+                    }
+                    low = low.min(v);
+                }
+                (low, true)
+            };
+            let (l, le) = side(&mut s[..p].iter().rev().copied());
+            let (r, re) = side(&mut s[p + 1..].iter().copied());
+            (h - l.max(r), le.then_some(l), re.then_some(r))
+        };
+        let mut rng = Stream::new(9, 0, 0, Purpose::Test);
+        let (mut ends, mut stops) = (0, 0);
+        for case in 0..20_000 {
+            let n = 1 + case % 29;
+            let s: Vec<f64> = (0..n)
+                .map(|_| (rng.uniform() * 8.0).floor() * 0.25)
+                .collect();
+            let p = (rng.uniform() * n as f64) as usize;
+            let want = by_definition(&s, p);
+            assert_eq!(prominence(&s, p), want, "case {case}: {s:?} at {p}");
+            ends += usize::from(want.1.is_some()) + usize::from(want.2.is_some());
+            stops += usize::from(want.1.is_none()) + usize::from(want.2.is_none());
+        }
+        assert!(ends > 5000 && stops > 5000, "{ends} {stops}");
     }
 
     #[test]
