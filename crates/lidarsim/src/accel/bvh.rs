@@ -763,7 +763,9 @@ impl RayCaster for Bvh {
         // The previous pulse's hits are overwritten in place, field by
         // field: filling with the whole tuple (`resize`, `fill`) copies it
         // through a stack slot, each copy stalled on a load that partly
-        // overlaps the store.
+        // overlaps the store. The normal is left as it was: it is read only
+        // for a hit, and every hit recorded writes it (NaN for surfaces
+        // other than triangles, filled in at the end).
         let mut best = std::mem::take(&mut out.hits);
         out.clear();
         let (bundle, sum) = Bundle::new(origin - self.origin, dirs);
@@ -773,7 +775,6 @@ impl RayCaster for Bvh {
         for b in &mut best {
             b.0 = t_max;
             b.1 = NO_HIT;
-            b.2 = DVec3::NAN;
         }
         volumes.clear();
         let mut missing = dirs.len();

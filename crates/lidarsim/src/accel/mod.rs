@@ -44,9 +44,9 @@ pub struct VolumeSpan {
 #[derive(Clone, Debug, Default)]
 pub struct PulseTrace {
     /// Per sub-ray: distance, primitive ([`NO_HIT`] for none) and unit
-    /// normal facing the ray of its closest surface. Bundle traversals work
-    /// in it directly, with a NaN normal until the end for surfaces other
-    /// than triangles.
+    /// normal facing the ray of its closest surface (meaningful only for a
+    /// hit). Bundle traversals work in it directly, with a NaN normal until
+    /// the end for surfaces other than triangles.
     pub(crate) hits: Vec<(f64, u32, DVec3)>,
     spans: Vec<VolumeSpan>,
     ranges: Vec<(u32, u32)>,
