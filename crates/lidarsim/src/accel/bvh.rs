@@ -938,14 +938,14 @@ impl RayCaster for Bvh {
 /// The bundle of a pulse as [`TriangleFan::coverage`] sees it: the rays'
 /// origin, and the axis and spread of their directions
 /// ([`crate::scene::bundle_spread`]), also in the lanes of AVX registers
-/// where the build has AVX.
+/// where the build has AVX2.
 struct Cone {
     origin: DVec3,
-    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
+    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx2"), allow(dead_code))]
     axis: DVec3,
-    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
+    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx2"), allow(dead_code))]
     spread: f64,
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
     lanes: sse::ConeLanes,
 }
 
@@ -955,7 +955,7 @@ impl Cone {
             origin,
             axis,
             spread,
-            #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+            #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
             lanes: sse::ConeLanes::new(origin, axis, spread),
         }
     }
@@ -963,15 +963,15 @@ impl Cone {
     /// The fan of `tri` from the bundle's origin with its edge planes only
     /// ([`TriangleFan::edges`]) and what its coverage leaves to test per ray
     /// (`None`: every ray passes the edge tests), unless the bundle misses
-    /// the triangle. With AVX the three edges take three lanes
+    /// the triangle. With AVX2 the three edges take three lanes
     /// ([`sse::ConeLanes::fan`]), else [`Cone::fan_scalar`].
     #[inline(always)]
     fn fan(&self, tri: &Triangle) -> Option<(TriangleFan, Option<Straddle>)> {
-        #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
         {
             self.lanes.fan(tri, self.origin)
         }
-        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
         {
             self.fan_scalar(tri)
         }
@@ -979,7 +979,7 @@ impl Cone {
 
     /// [`Cone::fan`] by [`TriangleFan::edges`] and
     /// [`TriangleFan::coverage`] (the definition).
-    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
+    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx2"), allow(dead_code))]
     #[inline]
     fn fan_scalar(&self, tri: &Triangle) -> Option<(TriangleFan, Option<Straddle>)> {
         let fan = TriangleFan::edges(tri, self.origin);
@@ -1209,7 +1209,9 @@ impl Bundle {
 #[cfg(target_arch = "x86_64")]
 mod sse {
     #[cfg(target_feature = "avx")]
-    use super::{Coverage, DVec3, Straddle, Triangle, TriangleFan};
+    use super::DVec3;
+    #[cfg(target_feature = "avx2")]
+    use super::{Coverage, Straddle, Triangle, TriangleFan};
     use super::{Node4, Sign};
     use std::arch::x86_64::*;
 
@@ -1256,7 +1258,7 @@ mod sse {
 
     /// The per-pulse operands of [`ConeLanes::fan`] in all four lanes: the
     /// rays' origin, the bundle's axis and its squared spread.
-    #[cfg(target_feature = "avx")]
+    #[cfg(target_feature = "avx2")]
     #[derive(Clone, Copy)]
     pub(super) struct ConeLanes {
         o: [__m256d; 3],
@@ -1264,10 +1266,10 @@ mod sse {
         s2: __m256d,
     }
 
-    #[cfg(target_feature = "avx")]
+    #[cfg(target_feature = "avx2")]
     impl ConeLanes {
         pub(super) fn new(origin: DVec3, axis: DVec3, spread: f64) -> Self {
-            // SAFETY: the build enables AVX (checked by the `cfg`).
+            // SAFETY: the build enables AVX2 (checked by the `cfg`).
             unsafe {
                 Self {
                     o: splat3(origin),
@@ -1291,10 +1293,9 @@ mod sse {
             origin: DVec3,
         ) -> Option<(TriangleFan, Option<Straddle>)> {
             let [v0, v1, v2] = tri.vertices();
-            // SAFETY: the build enables AVX and AVX2 (x86-64-v3, checked by
-            // the `cfg` for AVX; the permutation is AVX2, which every
-            // processor with AVX and the v3 level has); stores go to local
-            // arrays of four `f64`.
+            // SAFETY: the build enables AVX2 (checked by the `cfg`; the
+            // lane permutation needs it); stores go to local arrays of four
+            // `f64`.
             unsafe {
                 let corners = [
                     _mm256_setr_pd(v0.x, v1.x, v2.x, 0.0),
@@ -1334,10 +1335,10 @@ mod sse {
     }
 
     /// The four lanes of `e` in three registers.
-    #[cfg(target_feature = "avx")]
+    #[cfg(target_feature = "avx2")]
     #[inline(always)]
     fn splat3(e: DVec3) -> [__m256d; 3] {
-        // SAFETY: the build enables AVX (checked by the `cfg`).
+        // SAFETY: the build enables AVX2 (checked by the `cfg`).
         unsafe {
             [
                 _mm256_set1_pd(e.x),
@@ -1349,10 +1350,10 @@ mod sse {
 
     /// `DVec3::dot` of `d` with `e` lane by lane: the same products added in
     /// the same order, `(d.x·e.x + d.y·e.y) + d.z·e.z`.
-    #[cfg(target_feature = "avx")]
+    #[cfg(target_feature = "avx2")]
     #[inline(always)]
     fn dot4(d: &[__m256d; 3], e: &[__m256d; 3]) -> __m256d {
-        // SAFETY: the build enables AVX (checked by the `cfg`).
+        // SAFETY: the build enables AVX2 (checked by the `cfg`).
         unsafe {
             _mm256_add_pd(
                 _mm256_add_pd(_mm256_mul_pd(d[0], e[0]), _mm256_mul_pd(d[1], e[1])),
