@@ -15,6 +15,9 @@ use crate::scene::{
 use rayon::prelude::*;
 
 const MAX_LEAF: usize = 4;
+/// Children of a node of the traversal hierarchy: one per lane of an AVX
+/// register of `f32`.
+const WIDTH: usize = 8;
 const BINS: usize = 16;
 const STACK: usize = 96;
 /// Levels of the hierarchy whose two halves are built in parallel.
@@ -35,38 +38,40 @@ struct Node {
     count: u32,
 }
 
-/// An interior node of the four-wide hierarchy that the traversals use
-/// (collapsed from the binary one the build makes): the boxes of up to four
-/// children as structure of arrays, so that one SSE operation tests one axis
-/// of all four. An unused slot holds an empty box (lower bound +∞, upper
-/// −∞), which no box test enters.
+/// An interior node of the eight-wide hierarchy that the traversals use
+/// (collapsed from the binary one the build makes): the boxes of up to
+/// [`WIDTH`] children as structure of arrays, so that one AVX operation
+/// tests one axis of all of them (a wide hierarchy is shallower: fewer
+/// nodes, each loaded only after its parent's test, on the way to a leaf).
+/// An unused slot holds an empty box (lower bound +∞, upper −∞), which no
+/// box test enters.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-struct Node4 {
+struct WideNode {
     /// The box planes, `planes[row][slot]`: rows 0–2 the lower bounds on
     /// x, y, z, rows 3–5 the upper ones.
-    planes: [[f32; 4]; 6],
+    planes: [[f32; WIDTH]; 6],
     /// Interior child: its index in the node array. Leaf: the index of its
     /// first primitive (the scene's primitives are in leaf order).
-    child: [u32; 4],
+    child: [u32; WIDTH],
     /// 0 for an interior child (or an unused slot), else the number of
     /// primitives of the leaf.
-    count: [u32; 4],
+    count: [u32; WIDTH],
 }
 
-impl Node4 {
+impl WideNode {
     /// No children: every slot empty.
     const EMPTY: Self = Self {
         planes: [
-            [f32::INFINITY; 4],
-            [f32::INFINITY; 4],
-            [f32::INFINITY; 4],
-            [f32::NEG_INFINITY; 4],
-            [f32::NEG_INFINITY; 4],
-            [f32::NEG_INFINITY; 4],
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
+            [f32::NEG_INFINITY; WIDTH],
         ],
-        child: [0; 4],
-        count: [0; 4],
+        child: [0; WIDTH],
+        count: [0; WIDTH],
     };
 }
 
@@ -82,7 +87,7 @@ pub(crate) struct Pending {
 /// Size figures of a built hierarchy.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct BvhStats {
-    /// Number of (four-wide) interior nodes.
+    /// Number of (eight-wide) interior nodes.
     pub nodes: usize,
     /// Number of leaves.
     pub leaves: usize,
@@ -94,8 +99,8 @@ pub struct BvhStats {
 #[derive(Debug)]
 pub struct Bvh {
     scene: Scene,
-    /// Four-wide interior nodes; the root is the first.
-    nodes: Vec<Node4>,
+    /// Eight-wide interior nodes; the root is the first.
+    nodes: Vec<WideNode>,
     /// Traversal stack entries that the deepest path can need.
     stack_len: usize,
     origin: DVec3,
@@ -166,9 +171,7 @@ impl Bvh {
         in_leaf_order(&mut scene.primitives, order);
         bvh.scene = scene;
         bvh.nodes = wide;
-        // Each node visited leaves at most three of its children on the
-        // stack; the fourth is visited next (pushed, then popped).
-        bvh.stack_len = 3 * depth + 4;
+        bvh.stack_len = stack_len(depth);
         bvh
     }
 
@@ -298,7 +301,7 @@ impl Bvh {
         while let Some((i, d)) = stack.pop() {
             s.max_depth = s.max_depth.max(d);
             let n = &self.nodes[i];
-            for slot in 0..4 {
+            for slot in 0..WIDTH {
                 if n.count[slot] > 0 {
                     s.leaves += 1;
                 } else if n.planes[0][slot] <= n.planes[3][slot] {
@@ -328,11 +331,11 @@ impl Bvh {
         let mut stack = vec![(0usize, Vec::<Aabb>::new())];
         while let Some((i, path)) = stack.pop() {
             reached[i] += 1;
-            if 3 * (path.len() + 1) + 4 > self.stack_len {
+            if stack_len(path.len() + 1) > self.stack_len {
                 return Err(format!("node {i} is deeper than the traversal stack"));
             }
             let node = self.nodes[i];
-            for slot in 0..4 {
+            for slot in 0..WIDTH {
                 let lo = [0, 1, 2].map(|a| node.planes[a][slot] as f64);
                 let hi = [0, 1, 2].map(|a| node.planes[3 + a][slot] as f64);
                 if lo[0] > hi[0] {
@@ -428,13 +431,20 @@ fn zeroed_nodes(n: usize) -> Vec<Node> {
     }
 }
 
-/// The four-wide hierarchy of a binary one (root first, children of an
+/// Traversal stack entries for a hierarchy `depth` nodes deep: each node
+/// visited leaves at most `WIDTH − 1` of its children on the stack; the
+/// last is visited next (pushed, then popped).
+fn stack_len(depth: usize) -> usize {
+    (WIDTH - 1) * depth + WIDTH
+}
+
+/// The eight-wide hierarchy of a binary one (root first, children of an
 /// interior node adjacent) whose nodes reachable from the root number
-/// `used`: each four-wide node takes a binary node's two children and,
-/// while it has fewer than four, replaces its interior child with the
-/// largest box by that child's two children. Returns the nodes and the
-/// number of them on the longest path from the root.
-fn collapse(bin: &[Node], used: usize) -> (Vec<Node4>, usize) {
+/// `used`: each wide node takes a binary node's two children and, while it
+/// has fewer than [`WIDTH`], replaces its interior child with the largest
+/// box by that child's two children. Returns the nodes and the number of
+/// them on the longest path from the root.
+fn collapse(bin: &[Node], used: usize) -> (Vec<WideNode>, usize) {
     let mut wide = Vec::new();
     if used == 0 {
         return (wide, 0);
@@ -443,14 +453,14 @@ fn collapse(bin: &[Node], used: usize) -> (Vec<Node4>, usize) {
         let e = [0, 1, 2].map(|a| (n.max[a] - n.min[a]) as f64);
         e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
     };
-    wide.reserve_exact(used / 3 + 1);
-    wide.push(Node4::EMPTY);
+    wide.reserve_exact(used / (WIDTH - 1) + 1);
+    wide.push(WideNode::EMPTY);
     let mut depth = 0;
-    // (binary node, its four-wide node, depth)
+    // (binary node, its wide node, depth)
     let mut work = vec![(0usize, 0usize, 1usize)];
     while let Some((b, w, d)) = work.pop() {
         depth = depth.max(d);
-        let mut kids = [0usize; 4];
+        let mut kids = [0usize; WIDTH];
         let mut len = if bin[b].count > 0 {
             // A root that is a leaf: the only child.
             kids[0] = b;
@@ -460,7 +470,7 @@ fn collapse(bin: &[Node], used: usize) -> (Vec<Node4>, usize) {
             kids[..2].copy_from_slice(&[l, l + 1]);
             2
         };
-        while len < 4 {
+        while len < WIDTH {
             let mut open: Option<(usize, f64)> = None;
             for (i, &k) in kids[..len].iter().enumerate() {
                 if bin[k].count == 0 && open.is_none_or(|(_, a)| area(&bin[k]) > a) {
@@ -474,7 +484,7 @@ fn collapse(bin: &[Node], used: usize) -> (Vec<Node4>, usize) {
             kids[i + 1] = l + 1;
             len += 1;
         }
-        let mut node = Node4::EMPTY;
+        let mut node = WideNode::EMPTY;
         for (slot, &k) in kids[..len].iter().enumerate() {
             let n = &bin[k];
             for a in 0..3 {
@@ -487,7 +497,7 @@ fn collapse(bin: &[Node], used: usize) -> (Vec<Node4>, usize) {
             } else {
                 node.child[slot] = wide.len() as u32;
                 work.push((k, wide.len(), d + 1));
-                wide.push(Node4::EMPTY);
+                wide.push(WideNode::EMPTY);
             }
         }
         wide[w] = node;
@@ -673,7 +683,7 @@ impl Bvh {
                 let n = &self.nodes[child as usize];
                 let limit = slack(best_t);
                 let base = sp;
-                for slot in 0..4 {
+                for slot in 0..WIDTH {
                     if let Some(t) = slab(n, slot, &o, &inv, limit) {
                         stack[sp] = Pending {
                             t,
@@ -824,15 +834,19 @@ impl RayCaster for Bvh {
                 }
             } else {
                 let n = &self.nodes[child as usize];
-                let (mask, t) = bundle.enters4(n, slack(far));
+                let (mask, t) = bundle.enters(n, slack(far));
                 // One child entered (the usual case on the way down): to
                 // it directly, by a branch per slot, so that the processor
                 // can run ahead into it.
                 let only = match mask {
-                    0b0001 => Some(0),
-                    0b0010 => Some(1),
-                    0b0100 => Some(2),
-                    0b1000 => Some(3),
+                    0b0000_0001 => Some(0),
+                    0b0000_0010 => Some(1),
+                    0b0000_0100 => Some(2),
+                    0b0000_1000 => Some(3),
+                    0b0001_0000 => Some(4),
+                    0b0010_0000 => Some(5),
+                    0b0100_0000 => Some(6),
+                    0b1000_0000 => Some(7),
                     _ => None,
                 };
                 if let Some(slot) = only {
@@ -840,16 +854,9 @@ impl RayCaster for Bvh {
                     continue 'visit;
                 }
                 // Two: the farther waits on the stack.
-                let two = match mask {
-                    0b0011 => Some((0, 1)),
-                    0b0101 => Some((0, 2)),
-                    0b1001 => Some((0, 3)),
-                    0b0110 => Some((1, 2)),
-                    0b1010 => Some((1, 3)),
-                    0b1100 => Some((2, 3)),
-                    _ => None,
-                };
-                if let Some((i, j)) = two {
+                if mask.count_ones() == 2 {
+                    let i = mask.trailing_zeros() as usize;
+                    let j = (mask & (mask - 1)).trailing_zeros() as usize;
                     let (near, farther) = if t[i] <= t[j] { (i, j) } else { (j, i) };
                     stack[sp] = Pending {
                         t: t[farther],
@@ -1142,22 +1149,22 @@ impl Bundle {
     /// `t_max`: bit `slot` of the mask set for each, and per slot a lower
     /// bound of the distance at which it does (see [`Bundle::enters_box`]).
     #[inline]
-    fn enters4(&self, n: &Node4, t_max: f32) -> (u32, [f32; 4]) {
+    fn enters(&self, n: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
         #[cfg(target_arch = "x86_64")]
         {
-            self.simd.enters4(n, self.sign, t_max)
+            self.simd.enters(n, self.sign, t_max)
         }
         #[cfg(not(target_arch = "x86_64"))]
         {
-            self.enters4_scalar(n, t_max)
+            self.enters_scalar(n, t_max)
         }
     }
 
-    /// [`Bundle::enters4`] one slot at a time.
+    /// [`Bundle::enters`] one slot at a time.
     #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-    fn enters4_scalar(&self, n: &Node4, t_max: f32) -> (u32, [f32; 4]) {
+    fn enters_scalar(&self, n: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
         let mut mask = 0;
-        let mut t = [0.0; 4];
+        let mut t = [0.0; WIDTH];
         for (slot, t) in t.iter_mut().enumerate() {
             let lo = [0, 1, 2].map(|a| n.planes[a][slot]);
             let hi = [0, 1, 2].map(|a| n.planes[3 + a][slot]);
@@ -1203,25 +1210,32 @@ impl Bundle {
     }
 }
 
-/// The bundle box test on the four children of a node at once, one child
-/// per lane of SSE registers (SSE2, part of every x86-64 processor), and
-/// the AVX direction bounds.
+/// The bundle box test on the eight children of a node at once, one child
+/// per lane of AVX registers (or four at a time in SSE registers, part of
+/// every x86-64 processor, where the build has no AVX), the AVX direction
+/// bounds and the AVX2 triangle edge planes.
 #[cfg(target_arch = "x86_64")]
 mod sse {
     #[cfg(target_feature = "avx")]
     use super::DVec3;
     #[cfg(target_feature = "avx2")]
     use super::{Coverage, Straddle, Triangle, TriangleFan};
-    use super::{Node4, Sign};
+    use super::{Sign, WIDTH, WideNode};
     use std::arch::x86_64::*;
 
-    /// The bundle's constants, per axis, in all four lanes.
+    /// The bundle's constants, per axis, in all lanes (eight with AVX,
+    /// else four).
     #[derive(Clone, Copy)]
     pub(super) struct BundleLanes {
-        o: [__m128; 3],
-        inv_lo: [__m128; 3],
-        inv_hi: [__m128; 3],
+        o: [Lanes; 3],
+        inv_lo: [Lanes; 3],
+        inv_hi: [Lanes; 3],
     }
+
+    #[cfg(target_feature = "avx")]
+    type Lanes = __m256;
+    #[cfg(not(target_feature = "avx"))]
+    type Lanes = __m128;
 
     /// [`super::direction_bounds`] with the three components of a
     /// direction in lanes 0–2 of an AVX register: the same comparisons
@@ -1364,7 +1378,11 @@ mod sse {
 
     impl BundleLanes {
         pub(super) fn new(o: [f32; 3], inv_lo: [f32; 3], inv_hi: [f32; 3]) -> Self {
-            // SAFETY: SSE2 is part of the x86-64 baseline.
+            // SAFETY: SSE2 is part of the x86-64 baseline, and the AVX form
+            // is compiled only when the build enables AVX.
+            #[cfg(target_feature = "avx")]
+            let splat = |v: [f32; 3]| v.map(|x| unsafe { _mm256_set1_ps(x) });
+            #[cfg(not(target_feature = "avx"))]
             let splat = |v: [f32; 3]| v.map(|x| unsafe { _mm_set1_ps(x) });
             let (inv_lo, inv_hi) = (splat(inv_lo), splat(inv_hi));
             Self {
@@ -1374,41 +1392,95 @@ mod sse {
             }
         }
 
-        /// [`super::Bundle::enters4`]: per axis the products and the
+        /// [`super::Bundle::enters`]: per axis the products and the
         /// minima and maxima of [`super::Bundle::enters_box`], in the same
-        /// order, for the four slots at once.
+        /// order, for the eight slots at once (AVX).
+        #[cfg(target_feature = "avx")]
         #[inline(always)]
-        pub(super) fn enters4(&self, n: &Node4, sign: [Sign; 3], t_max: f32) -> (u32, [f32; 4]) {
-            // SAFETY: SSE2 is part of the x86-64 baseline; each load reads
-            // one `[f32; 4]` of the node, 16-byte aligned (the node is
-            // 64-byte aligned and its arrays are 16 bytes each).
+        pub(super) fn enters(
+            &self,
+            n: &WideNode,
+            sign: [Sign; 3],
+            t_max: f32,
+        ) -> (u32, [f32; WIDTH]) {
+            // SAFETY: the build enables AVX (checked by the `cfg`); each
+            // load reads one `[f32; 8]` of the node, 32-byte aligned (the
+            // node is 64-byte aligned and its arrays are 32 bytes each).
             unsafe {
-                let mut t0 = _mm_setzero_ps();
-                let mut t1 = _mm_set1_ps(t_max);
+                let mut t0 = _mm256_setzero_ps();
+                let mut t1 = _mm256_set1_ps(t_max);
                 for (a, sign) in sign.iter().enumerate() {
-                    let lo = _mm_load_ps(n.planes[a].as_ptr());
-                    let hi = _mm_load_ps(n.planes[3 + a].as_ptr());
-                    let below = _mm_mul_ps(_mm_sub_ps(lo, self.o[a]), self.inv_hi[a]);
-                    let above = _mm_mul_ps(_mm_sub_ps(hi, self.o[a]), self.inv_lo[a]);
+                    let lo = _mm256_load_ps(n.planes[a].as_ptr());
+                    let hi = _mm256_load_ps(n.planes[3 + a].as_ptr());
+                    let below = _mm256_mul_ps(_mm256_sub_ps(lo, self.o[a]), self.inv_hi[a]);
+                    let above = _mm256_mul_ps(_mm256_sub_ps(hi, self.o[a]), self.inv_lo[a]);
                     match sign {
                         Sign::Positive => {
-                            t0 = _mm_max_ps(t0, below);
-                            t1 = _mm_min_ps(t1, above);
+                            t0 = _mm256_max_ps(t0, below);
+                            t1 = _mm256_min_ps(t1, above);
                         }
                         Sign::Negative => {
-                            t0 = _mm_max_ps(t0, above);
-                            t1 = _mm_min_ps(t1, below);
+                            t0 = _mm256_max_ps(t0, above);
+                            t1 = _mm256_min_ps(t1, below);
                         }
                         Sign::Straddles => {
-                            t0 = _mm_max_ps(_mm_max_ps(t0, below), above);
+                            t0 = _mm256_max_ps(_mm256_max_ps(t0, below), above);
                         }
                     }
                 }
-                let mask = _mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32;
-                let mut t = [0.0f32; 4];
-                _mm_storeu_ps(t.as_mut_ptr(), t0);
+                // The operands are never NaN (the reciprocals are finite
+                // and non-zero), so ordered and quiet is `<=`.
+                let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1)) as u32;
+                let mut t = [0.0f32; WIDTH];
+                _mm256_storeu_ps(t.as_mut_ptr(), t0);
                 (mask, t)
             }
+        }
+
+        /// [`super::Bundle::enters`] in SSE registers, four slots at a
+        /// time, where the build has no AVX.
+        #[cfg(not(target_feature = "avx"))]
+        #[inline(always)]
+        pub(super) fn enters(
+            &self,
+            n: &WideNode,
+            sign: [Sign; 3],
+            t_max: f32,
+        ) -> (u32, [f32; WIDTH]) {
+            let mut mask = 0;
+            let mut t = [0.0f32; WIDTH];
+            for half in 0..WIDTH / 4 {
+                let at = 4 * half;
+                // SAFETY: SSE2 is part of the x86-64 baseline; each load
+                // reads four `f32` of one row of the node, 16-byte aligned
+                // (the node is 64-byte aligned, its rows 32 bytes each).
+                unsafe {
+                    let mut t0 = _mm_setzero_ps();
+                    let mut t1 = _mm_set1_ps(t_max);
+                    for (a, sign) in sign.iter().enumerate() {
+                        let lo = _mm_load_ps(n.planes[a][at..].as_ptr());
+                        let hi = _mm_load_ps(n.planes[3 + a][at..].as_ptr());
+                        let below = _mm_mul_ps(_mm_sub_ps(lo, self.o[a]), self.inv_hi[a]);
+                        let above = _mm_mul_ps(_mm_sub_ps(hi, self.o[a]), self.inv_lo[a]);
+                        match sign {
+                            Sign::Positive => {
+                                t0 = _mm_max_ps(t0, below);
+                                t1 = _mm_min_ps(t1, above);
+                            }
+                            Sign::Negative => {
+                                t0 = _mm_max_ps(t0, above);
+                                t1 = _mm_min_ps(t1, below);
+                            }
+                            Sign::Straddles => {
+                                t0 = _mm_max_ps(_mm_max_ps(t0, below), above);
+                            }
+                        }
+                    }
+                    mask |= (_mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32) << at;
+                    _mm_storeu_ps(t[at..].as_mut_ptr(), t0);
+                }
+            }
+            (mask, t)
         }
     }
 }
@@ -1426,7 +1498,7 @@ fn inv(d: f64) -> f32 {
 /// before `t_max` (per axis the near plane by the sign of the reciprocal
 /// direction, so that an empty box is entered by no ray).
 #[inline]
-fn slab(n: &Node4, slot: usize, o: &[f32; 3], inv: &[f32; 3], t_max: f32) -> Option<f32> {
+fn slab(n: &WideNode, slot: usize, o: &[f32; 3], inv: &[f32; 3], t_max: f32) -> Option<f32> {
     let mut t0 = 0.0f32;
     let mut t1 = t_max;
     for a in 0..3 {
@@ -1600,7 +1672,7 @@ mod tests {
         }
     }
 
-    /// The SSE box test is the scalar one: the same entry distance or the
+    /// The box test in lanes is the scalar one: the same entry distance or the
     /// same miss, for bundles of every sign pattern (positive, negative and
     /// straddling axes) against boxes all around them, and empty slots
     /// entered by none.
@@ -1639,8 +1711,8 @@ mod tests {
             // Boxes near the bundle's axis, behind the origin or ahead of it,
             // in the slots of a node; the last slot of every third node is
             // left empty.
-            let mut node = Node4::EMPTY;
-            for slot in 0..4 - usize::from(case % 3 == 0) {
+            let mut node = WideNode::EMPTY;
+            for slot in 0..WIDTH - usize::from(case % 3 == 0) {
                 let near = o + c * (u() * 200.0) + DVec3::new(u(), u(), u()) * 30.0;
                 let size = DVec3::new(u() + 0.5, u() + 0.5, u() + 0.5)
                     * [0.0, 1.0, 20.0][(case + slot) % 3];
@@ -1651,7 +1723,7 @@ mod tests {
                 }
             }
             let t_max = [1e3f32, 60.0][case % 2];
-            let (mask, t) = bundle.enters4(&node, t_max);
+            let (mask, t) = bundle.enters(&node, t_max);
             for (slot, &t) in t.iter().enumerate() {
                 let lo = [0, 1, 2].map(|k| node.planes[k][slot]);
                 let hi = [0, 1, 2].map(|k| node.planes[3 + k][slot]);
@@ -1667,11 +1739,7 @@ mod tests {
                     assert!(!enters, "case {case}: an empty slot is entered");
                 }
             }
-            assert_eq!(
-                (mask, t),
-                bundle.enters4_scalar(&node, t_max),
-                "case {case}"
-            );
+            assert_eq!((mask, t), bundle.enters_scalar(&node, t_max), "case {case}");
         }
         assert!(entered > 4000 && missed > 4000, "{entered} {missed}");
     }
