@@ -13,13 +13,12 @@
 //! describes the items, and bit 7 of the point data format byte marks the
 //! file as compressed.
 
-use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
 
-use super::{AtomicFile, PointRecord, PointSink, WaveformBlock, file_error};
+use super::{AtomicFile, OutFile, PointRecord, PointSink, WaveformBlock, file_error};
 use crate::geometry::SPEED_OF_LIGHT_MPS;
 
 /// Size of a point data record of format 6, bytes.
@@ -199,7 +198,7 @@ type Vlr = (&'static str, u16, String, Vec<u8>);
 /// Where the points' bytes go: straight to the file or through LASzip.
 enum Body {
     Plain,
-    Laz(Box<LasZipCompressor<'static, BufWriter<File>>>),
+    Laz(Box<LasZipCompressor<'static, BufWriter<OutFile>>>),
 }
 
 /// The external waveform file and where its packets go.
