@@ -594,35 +594,42 @@ impl LasWriter {
         // (pulse key, wave packet fields) of the packet last written.
         let mut current: Option<((u16, u64), WavePacketLink)> = None;
         let o = self.settings.origin_m;
+        // The buffer takes the points' records whole (an `extend` per field
+        // costs a capacity check and a length update each).
+        self.buf
+            .reserve(points.len() * usize::from(self.record_len()));
         for p in points {
             let xyz = [
                 self.quantize(p.position_m.x + o[0], 0)?,
                 self.quantize(p.position_m.y + o[1], 1)?,
                 self.quantize(p.position_m.z + o[2], 2)?,
             ];
+            // The 30 bytes of point data record format 6 (LAS 1.4 R15,
+            // Table 16).
+            let mut rec = [0u8; POINT_FORMAT_6_LEN as usize];
             for (a, q) in xyz.iter().enumerate() {
                 self.min[a] = self.min[a].min(*q);
                 self.max[a] = self.max[a].max(*q);
-                self.buf.extend_from_slice(&q.to_le_bytes());
+                rec[4 * a..4 * a + 4].copy_from_slice(&q.to_le_bytes());
             }
-            self.buf.extend_from_slice(&p.intensity.to_le_bytes());
+            rec[12..14].copy_from_slice(&p.intensity.to_le_bytes());
             let rn = p.return_number.clamp(1, 15);
             let nr = p.number_of_returns.clamp(1, 15);
-            self.buf.push(rn | (nr << 4));
+            rec[14] = rn | (nr << 4);
             // Classification flags 0, scanner channel 0, then the scan
             // direction flag (bit 6) and edge of flight line (bit 7).
-            self.buf.push(
-                (u8::from(p.scan_direction_positive) << 6) | (u8::from(p.edge_of_flight_line) << 7),
-            );
-            self.buf.push(p.classification);
-            self.buf.push(p.component); // user data: what returned the echo
+            rec[15] =
+                (u8::from(p.scan_direction_positive) << 6) | (u8::from(p.edge_of_flight_line) << 7);
+            rec[16] = p.classification;
+            rec[17] = p.component; // user data: what returned the echo
             // Scan angle in 0.006° increments, −30 000 … +30 000.
             let sa = (p.scan_angle_deg / 0.006)
                 .round()
                 .clamp(-30_000.0, 30_000.0) as i16;
-            self.buf.extend_from_slice(&sa.to_le_bytes());
-            self.buf.extend_from_slice(&p.point_source_id.to_le_bytes());
-            self.buf.extend_from_slice(&p.gps_time_s.to_le_bytes());
+            rec[18..20].copy_from_slice(&sa.to_le_bytes());
+            rec[20..22].copy_from_slice(&p.point_source_id.to_le_bytes());
+            rec[22..30].copy_from_slice(&p.gps_time_s.to_le_bytes());
+            self.buf.extend_from_slice(&rec);
             if let Some(wdp) = self.wdp.as_mut() {
                 let key = (p.point_source_id, p.pulse_index);
                 let link = match current {
@@ -653,20 +660,30 @@ impl LasWriter {
                 write_wave_packet(&mut self.buf, p, link, wdp.digitizer.bin_ps);
             }
             if self.settings.attribute_extra_bytes {
-                for v in [
+                let mut extra = [0u8; 4 * ATTRIBUTE_FIELDS.len()];
+                for (i, v) in [
                     p.amplitude,
                     p.echo_width_ns,
                     p.range_m,
                     p.incidence_angle_deg.unwrap_or(f64::NAN),
-                ] {
-                    self.buf.extend_from_slice(&(v as f32).to_le_bytes());
+                ]
+                .into_iter()
+                .enumerate()
+                {
+                    extra[4 * i..4 * i + 4].copy_from_slice(&(v as f32).to_le_bytes());
                 }
-                self.buf.extend_from_slice(&p.object_id.to_le_bytes());
+                extra[16..20].copy_from_slice(&p.object_id.to_le_bytes());
+                self.buf.extend_from_slice(&extra);
             }
             if self.settings.error_extra_bytes {
-                for e in [p.error_m.x, p.error_m.y, p.error_m.z] {
-                    self.buf.extend_from_slice(&(e as f32).to_le_bytes());
+                let mut extra = [0u8; 4 * ERROR_FIELDS.len()];
+                for (i, e) in [p.error_m.x, p.error_m.y, p.error_m.z]
+                    .into_iter()
+                    .enumerate()
+                {
+                    extra[4 * i..4 * i + 4].copy_from_slice(&(e as f32).to_le_bytes());
                 }
+                self.buf.extend_from_slice(&extra);
             }
             self.count += 1;
             self.by_return[usize::from(rn) - 1] += 1;
