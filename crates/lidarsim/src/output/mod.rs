@@ -158,8 +158,8 @@ impl PointSink for MemorySink {
 /// its device ([`OutFile`]).
 const WRITEBACK_BYTES: u64 = 4 << 20;
 
-/// The file under an [`AtomicFile`]'s buffer. Every [`WRITEBACK_BYTES`]
-/// written, it asks the kernel to start writing those bytes to the device
+/// The file under an [`AtomicFile`]'s buffer. Every 4 MiB written
+/// (`WRITEBACK_BYTES`), it asks the kernel to start writing those bytes to the device
 /// without waiting for them (Linux `sync_file_range` with
 /// `SYNC_FILE_RANGE_WRITE`; elsewhere nothing), so that the device works
 /// while the simulation goes on and the sync at [`AtomicFile::commit`] has
