@@ -953,7 +953,7 @@ struct Cone {
     #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx2"), allow(dead_code))]
     spread: f64,
     #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
-    lanes: sse::ConeLanes,
+    lanes: avx::ConeLanes,
 }
 
 impl Cone {
@@ -963,7 +963,7 @@ impl Cone {
             axis,
             spread,
             #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
-            lanes: sse::ConeLanes::new(origin, axis, spread),
+            lanes: avx::ConeLanes::new(origin, axis, spread),
         }
     }
 
@@ -971,7 +971,7 @@ impl Cone {
     /// ([`TriangleFan::edges`]) and what its coverage leaves to test per ray
     /// (`None`: every ray passes the edge tests), unless the bundle misses
     /// the triangle. With AVX2 the three edges take three lanes
-    /// ([`sse::ConeLanes::fan`]), else [`Cone::fan_scalar`].
+    /// ([`avx::ConeLanes::fan`]), else [`Cone::fan_scalar`].
     #[inline(always)]
     fn fan(&self, tri: &Triangle) -> Option<(TriangleFan, Option<Straddle>)> {
         #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
@@ -1063,8 +1063,8 @@ struct Bundle {
     /// Per axis: reciprocals of the lower and upper direction bounds.
     inv_lo: [f32; 3],
     inv_hi: [f32; 3],
-    #[cfg(target_arch = "x86_64")]
-    simd: sse::BundleLanes,
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    simd: avx::BundleLanes,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -1080,7 +1080,7 @@ enum Sign {
 fn direction_bounds(dirs: &[DVec3]) -> ([f64; 3], [f64; 3], DVec3) {
     #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
     {
-        sse::direction_bounds(dirs)
+        avx::direction_bounds(dirs)
     }
     #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
     {
@@ -1135,8 +1135,8 @@ impl Bundle {
         }
         let o = [o.x as f32, o.y as f32, o.z as f32];
         let bundle = Self {
-            #[cfg(target_arch = "x86_64")]
-            simd: sse::BundleLanes::new(o, inv_lo, inv_hi),
+            #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+            simd: avx::BundleLanes::new(o, inv_lo, inv_hi),
             o,
             sign,
             inv_lo,
@@ -1150,18 +1150,19 @@ impl Bundle {
     /// bound of the distance at which it does (see [`Bundle::enters_box`]).
     #[inline]
     fn enters(&self, n: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
-        #[cfg(target_arch = "x86_64")]
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
         {
             self.simd.enters(n, self.sign, t_max)
         }
-        #[cfg(not(target_arch = "x86_64"))]
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
         {
             self.enters_scalar(n, t_max)
         }
     }
 
-    /// [`Bundle::enters`] one slot at a time.
-    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
+    /// [`Bundle::enters`] one slot at a time (the definition, and the
+    /// form a build without AVX runs).
+    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
     fn enters_scalar(&self, n: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
         let mut mask = 0;
         let mut t = [0.0; WIDTH];
@@ -1177,7 +1178,7 @@ impl Bundle {
 
     /// Whether some ray of the bundle can enter the box `[lo, hi]` (relative
     /// to the hierarchy's origin) before `t_max`, and a lower bound of the
-    /// distance at which it does (the definition; the SSE form computes the
+    /// distance at which it does (the definition; the AVX form computes the
     /// same products, minima and maxima).
     ///
     /// On each axis a ray `o + t·d` (t ≥ 0) with `lo ≤ d ≤ hi` is inside the
@@ -1211,37 +1212,28 @@ impl Bundle {
 }
 
 /// The bundle box test on the eight children of a node at once, one child
-/// per lane of AVX registers (or four at a time in SSE registers, part of
-/// every x86-64 processor, where the build has no AVX), the AVX direction
-/// bounds and the AVX2 triangle edge planes.
-#[cfg(target_arch = "x86_64")]
-mod sse {
-    #[cfg(target_feature = "avx")]
+/// per lane of AVX registers, the AVX direction bounds and the AVX2
+/// triangle edge planes.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+mod avx {
     use super::DVec3;
     #[cfg(target_feature = "avx2")]
     use super::{Coverage, Straddle, Triangle, TriangleFan};
     use super::{Sign, WIDTH, WideNode};
     use std::arch::x86_64::*;
 
-    /// The bundle's constants, per axis, in all lanes (eight with AVX,
-    /// else four).
+    /// The bundle's constants, per axis, in all eight lanes.
     #[derive(Clone, Copy)]
     pub(super) struct BundleLanes {
-        o: [Lanes; 3],
-        inv_lo: [Lanes; 3],
-        inv_hi: [Lanes; 3],
+        o: [__m256; 3],
+        inv_lo: [__m256; 3],
+        inv_hi: [__m256; 3],
     }
-
-    #[cfg(target_feature = "avx")]
-    type Lanes = __m256;
-    #[cfg(not(target_feature = "avx"))]
-    type Lanes = __m128;
 
     /// [`super::direction_bounds`] with the three components of a
     /// direction in lanes 0–2 of an AVX register: the same comparisons
     /// (`_mm256_min_pd(d, lo)` is `d < lo ? d : lo`) and the same additions
     /// in the same order.
-    #[cfg(target_feature = "avx")]
     #[inline]
     pub(super) fn direction_bounds(dirs: &[DVec3]) -> ([f64; 3], [f64; 3], DVec3) {
         // SAFETY: the build enables AVX (checked by the `cfg`); each masked
@@ -1378,12 +1370,8 @@ mod sse {
 
     impl BundleLanes {
         pub(super) fn new(o: [f32; 3], inv_lo: [f32; 3], inv_hi: [f32; 3]) -> Self {
-            // SAFETY: SSE2 is part of the x86-64 baseline, and the AVX form
-            // is compiled only when the build enables AVX.
-            #[cfg(target_feature = "avx")]
+            // SAFETY: the build enables AVX (checked by the `cfg`).
             let splat = |v: [f32; 3]| v.map(|x| unsafe { _mm256_set1_ps(x) });
-            #[cfg(not(target_feature = "avx"))]
-            let splat = |v: [f32; 3]| v.map(|x| unsafe { _mm_set1_ps(x) });
             let (inv_lo, inv_hi) = (splat(inv_lo), splat(inv_hi));
             Self {
                 o: splat(o),
@@ -1394,8 +1382,7 @@ mod sse {
 
         /// [`super::Bundle::enters`]: per axis the products and the
         /// minima and maxima of [`super::Bundle::enters_box`], in the same
-        /// order, for the eight slots at once (AVX).
-        #[cfg(target_feature = "avx")]
+        /// order, for the eight slots at once.
         #[inline(always)]
         pub(super) fn enters(
             &self,
@@ -1435,52 +1422,6 @@ mod sse {
                 _mm256_storeu_ps(t.as_mut_ptr(), t0);
                 (mask, t)
             }
-        }
-
-        /// [`super::Bundle::enters`] in SSE registers, four slots at a
-        /// time, where the build has no AVX.
-        #[cfg(not(target_feature = "avx"))]
-        #[inline(always)]
-        pub(super) fn enters(
-            &self,
-            n: &WideNode,
-            sign: [Sign; 3],
-            t_max: f32,
-        ) -> (u32, [f32; WIDTH]) {
-            let mut mask = 0;
-            let mut t = [0.0f32; WIDTH];
-            for half in 0..WIDTH / 4 {
-                let at = 4 * half;
-                // SAFETY: SSE2 is part of the x86-64 baseline; each load
-                // reads four `f32` of one row of the node, 16-byte aligned
-                // (the node is 64-byte aligned, its rows 32 bytes each).
-                unsafe {
-                    let mut t0 = _mm_setzero_ps();
-                    let mut t1 = _mm_set1_ps(t_max);
-                    for (a, sign) in sign.iter().enumerate() {
-                        let lo = _mm_load_ps(n.planes[a][at..].as_ptr());
-                        let hi = _mm_load_ps(n.planes[3 + a][at..].as_ptr());
-                        let below = _mm_mul_ps(_mm_sub_ps(lo, self.o[a]), self.inv_hi[a]);
-                        let above = _mm_mul_ps(_mm_sub_ps(hi, self.o[a]), self.inv_lo[a]);
-                        match sign {
-                            Sign::Positive => {
-                                t0 = _mm_max_ps(t0, below);
-                                t1 = _mm_min_ps(t1, above);
-                            }
-                            Sign::Negative => {
-                                t0 = _mm_max_ps(t0, above);
-                                t1 = _mm_min_ps(t1, below);
-                            }
-                            Sign::Straddles => {
-                                t0 = _mm_max_ps(_mm_max_ps(t0, below), above);
-                            }
-                        }
-                    }
-                    mask |= (_mm_movemask_ps(_mm_cmple_ps(t0, t1)) as u32) << at;
-                    _mm_storeu_ps(t[at..].as_mut_ptr(), t0);
-                }
-            }
-            (mask, t)
         }
     }
 }
