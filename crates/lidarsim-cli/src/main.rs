@@ -330,6 +330,11 @@ fn bench(
                     r.points as f64 / r.seconds
                 );
                 println!("{name} threads {t} las_fnv1a {:016x}", r.las_hash);
+                if let (Some(cpu), Some(writer)) = (r.cpu_s, r.writer_cpu_s) {
+                    println!("{name} threads {t} cpu_s {cpu:.3}");
+                    println!("{name} threads {t} cores_busy {:.2}", cpu / r.seconds);
+                    println!("{name} threads {t} writer_cpu_s {writer:.3}");
+                }
             }
             if let [a, b, ..] = &f.runs[..] {
                 println!(

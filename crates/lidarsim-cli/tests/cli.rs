@@ -549,3 +549,55 @@ fn waveform_replays_a_run_over_a_relative_terrain_raster() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `lidarsim bench` on a short flat run: one `scene key value` line per
+/// figure, the same LAS on 1 and 2 threads, and CPU figures that are
+/// consistent with each other (the writer thread is part of the process, and
+/// a run cannot keep more cores busy than it has threads plus the writer).
+#[test]
+fn bench_prints_figures_a_script_can_read() {
+    let dir = temp("bench");
+    let o = bin()
+        .args([
+            "bench",
+            "--scene",
+            "flat",
+            "--threads",
+            "1,2",
+            "--pulses",
+            "20000",
+        ])
+        .arg("--work-dir")
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8(o.stdout).unwrap();
+    let value = |key: &str| -> String {
+        let line = text
+            .lines()
+            .find(|l| l.strip_prefix("flat ").is_some_and(|r| r.starts_with(key)))
+            .unwrap_or_else(|| panic!("no `flat {key}` line in\n{text}"));
+        line.rsplit(' ').next().unwrap().to_string()
+    };
+    let num = |key: &str| value(key).parse::<f64>().unwrap();
+    assert_eq!(num("primitives "), 62.0);
+    for t in [1, 2] {
+        assert_eq!(num(&format!("threads {t} pulses ")), 20000.0);
+        let (seconds, cpu) = (
+            num(&format!("threads {t} seconds ")),
+            num(&format!("threads {t} cpu_s ")),
+        );
+        let writer = num(&format!("threads {t} writer_cpu_s "));
+        assert!(seconds > 0.0 && cpu > 0.0, "{text}");
+        assert!((0.0..=cpu).contains(&writer), "{text}");
+        // Timer and CPU clocks tick differently: a little slack.
+        assert!(cpu <= (t as f64 + 1.0) * seconds + 0.02, "{text}");
+    }
+    assert_eq!(
+        value("threads 1 las_fnv1a"),
+        value("threads 2 las_fnv1a"),
+        "thread counts must write the same LAS"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -319,6 +319,14 @@ pub struct RunFigures {
     /// FNV-1a hash of the LAS file written, to show that thread counts
     /// give identical output.
     pub las_hash: u64,
+    /// CPU seconds (user + system) the whole process spent in the run:
+    /// divided by `seconds`, how many cores it kept busy (`None` where the
+    /// platform does not tell).
+    pub cpu_s: Option<f64>,
+    /// CPU seconds of the calling thread, which puts the blocks in order and
+    /// writes the LAS file while the workers simulate: the serial part that
+    /// shares the cores with them.
+    pub writer_cpu_s: Option<f64>,
 }
 
 impl RunFigures {
@@ -326,6 +334,31 @@ impl RunFigures {
     pub fn pulses_per_s(&self) -> f64 {
         self.pulses as f64 / self.seconds
     }
+}
+
+/// CPU seconds (user + system) used so far by this process
+/// (`RUSAGE_SELF`) or by the calling thread (`RUSAGE_THREAD`); Linux only.
+#[cfg(target_os = "linux")]
+fn cpu_seconds(thread: bool) -> Option<f64> {
+    let who = if thread {
+        libc::RUSAGE_THREAD
+    } else {
+        libc::RUSAGE_SELF
+    };
+    // SAFETY: `getrusage` only writes the struct it is given, which is
+    // plain data and valid when zeroed.
+    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
+    if unsafe { libc::getrusage(who, &mut usage) } != 0 {
+        return None;
+    }
+    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
+    Some(secs(usage.ru_utime) + secs(usage.ru_stime))
+}
+
+/// CPU time is not read on this platform.
+#[cfg(not(target_os = "linux"))]
+fn cpu_seconds(_thread: bool) -> Option<f64> {
+    None
 }
 
 /// 64-bit FNV-1a hash of a LAS file without its creation day and year (header
@@ -365,6 +398,7 @@ pub fn measure(
     for &n in threads {
         let path = work_dir.join(format!("{}-{n}.las", scene.name()));
         let settings = las_settings(&survey, &bvh as &dyn RayCaster);
+        let (cpu0, writer0) = (cpu_seconds(false), cpu_seconds(true));
         let t = Instant::now();
         let mut las = LasWriter::create(&path, settings).map_err(|e| e.to_string())?;
         let counts = sim
@@ -372,6 +406,9 @@ pub fn measure(
             .map_err(|e| e.to_string())?;
         Box::new(las).finish().map_err(|e| e.to_string())?;
         let seconds = t.elapsed().as_secs_f64();
+        let used = |a: Option<f64>, b: Option<f64>| Some(b? - a?);
+        let cpu_s = used(cpu0, cpu_seconds(false));
+        let writer_cpu_s = used(writer0, cpu_seconds(true));
         let las_hash = fnv1a(&path).map_err(|e| e.to_string())?;
         let _ = std::fs::remove_file(&path);
         runs.push(RunFigures {
@@ -381,6 +418,8 @@ pub fn measure(
             points: counts.points,
             seconds,
             las_hash,
+            cpu_s,
+            writer_cpu_s,
         });
     }
     Ok(SceneFigures {
