@@ -330,9 +330,11 @@ fn bench(
                     r.points as f64 / r.seconds
                 );
                 println!("{name} threads {t} las_fnv1a {:016x}", r.las_hash);
-                if let (Some(cpu), Some(writer)) = (r.cpu_s, r.writer_cpu_s) {
+                if let (Some(cpu), Some(busy), Some(writer)) =
+                    (r.cpu_s, r.cores_busy(), r.writer_cpu_s)
+                {
                     println!("{name} threads {t} cpu_s {cpu:.3}");
-                    println!("{name} threads {t} cores_busy {:.2}", cpu / r.seconds);
+                    println!("{name} threads {t} cores_busy {busy:.2}");
                     println!("{name} threads {t} writer_cpu_s {writer:.3}");
                 }
             }
@@ -343,6 +345,12 @@ fn bench(
                     b.threads,
                     b.pulses_per_s() / a.pulses_per_s()
                 );
+                if let Some(x) = b.speedup_at_equal_cpu(a) {
+                    println!(
+                        "{name} scaling_{}_to_{}_at_equal_cpu {x:.2}",
+                        a.threads, b.threads
+                    );
+                }
                 println!("{name} identical_output {}", a.las_hash == b.las_hash);
             }
             if let Some(bytes) = f.peak_rss_bytes {

@@ -594,6 +594,13 @@ fn bench_prints_figures_a_script_can_read() {
         // Timer and CPU clocks tick differently: a little slack.
         assert!(cpu <= (t as f64 + 1.0) * seconds + 0.02, "{text}");
     }
+    // At equal CPU per pulse, the speed-up is the ratio of the busy cores
+    // (both printed rounded to 0.01).
+    let busy = num("threads 2 cores_busy ") / num("threads 1 cores_busy ");
+    assert!(
+        (num("scaling_1_to_2_at_equal_cpu ") - busy).abs() < 0.03,
+        "{text}"
+    );
     assert_eq!(
         value("threads 1 las_fnv1a"),
         value("threads 2 las_fnv1a"),

@@ -334,6 +334,23 @@ impl RunFigures {
     pub fn pulses_per_s(&self) -> f64 {
         self.pulses as f64 / self.seconds
     }
+
+    /// CPU seconds per wall-clock second: how many cores the run kept busy.
+    pub fn cores_busy(&self) -> Option<f64> {
+        Some(self.cpu_s? / self.seconds)
+    }
+
+    /// The speed-up of `self` over `base` that the same work would show if
+    /// each pulse had cost the same CPU time in both runs:
+    /// `(pulses/s ratio) × (CPU per pulse of self) / (CPU per pulse of
+    /// base)`, which for equal pulse counts is the ratio of the cores kept
+    /// busy. On a shared machine the CPU time of the same work varies from
+    /// run to run; this figure leaves that out and keeps what the program's
+    /// own structure gives (idle cores, the writer's serial share).
+    pub fn speedup_at_equal_cpu(&self, base: &RunFigures) -> Option<f64> {
+        let per_pulse = |r: &RunFigures| Some(r.cpu_s? / r.pulses as f64);
+        Some(self.pulses_per_s() / base.pulses_per_s() * per_pulse(self)? / per_pulse(base)?)
+    }
 }
 
 /// CPU seconds (user + system) used so far by this process
@@ -435,6 +452,39 @@ pub fn measure(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn run(threads: usize, pulses: u64, seconds: f64, cpu_s: Option<f64>) -> RunFigures {
+        RunFigures {
+            threads,
+            pulses,
+            rays: pulses * 19,
+            points: pulses,
+            seconds,
+            las_hash: 0,
+            cpu_s,
+            writer_cpu_s: None,
+        }
+    }
+
+    /// With equal pulse counts, the speed-up at equal CPU cost per pulse is
+    /// the ratio of the cores kept busy; a run whose pulses cost more CPU
+    /// (a slower moment of the machine) is credited for it.
+    #[test]
+    fn speedup_at_equal_cpu_is_the_ratio_of_busy_cores() {
+        let one = run(1, 500_000, 0.60, Some(0.63));
+        // Two threads, each pulse 10 % dearer in CPU: 1.90 busy cores.
+        let two = run(2, 500_000, 0.363, Some(0.6897));
+        let raw = two.pulses_per_s() / one.pulses_per_s();
+        let fair = two.speedup_at_equal_cpu(&one).unwrap();
+        let busy = (0.6897 / 0.363) / (0.63 / 0.60);
+        assert!((fair - busy).abs() < 1e-12, "{fair} vs {busy}");
+        assert!((fair / raw - 0.6897 / 0.63).abs() < 1e-12);
+        // Different pulse counts: per pulse, not per run.
+        let half = run(2, 250_000, 0.1815, Some(0.34485));
+        assert!((half.speedup_at_equal_cpu(&one).unwrap() - busy).abs() < 1e-9);
+        assert_eq!(run(2, 1, 1.0, None).speedup_at_equal_cpu(&one), None);
+        assert_eq!(two.speedup_at_equal_cpu(&run(1, 1, 1.0, None)), None);
+    }
 
     #[test]
     fn terrain_grid_has_the_reference_triangle_count() {
