@@ -21,6 +21,11 @@ use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
 use super::{AtomicFile, OutFile, PointRecord, PointSink, WaveformBlock, file_error};
 use crate::geometry::SPEED_OF_LIGHT_MPS;
 
+/// Bytes of point records gathered before an uncompressed file is written
+/// (as much as the file's buffer holds, so that they need not pass through
+/// it).
+const LAS_WRITE_BYTES: usize = 1 << 20;
+
 /// Size of a point data record of format 6, bytes.
 pub const POINT_FORMAT_6_LEN: u16 = 30;
 /// Size of a point data record of format 9, bytes: format 6 plus the wave
@@ -272,7 +277,7 @@ impl LasWriter {
             by_return: [0; 15],
             min: [i32::MAX; 3],
             max: [i32::MIN; 3],
-            buf: Vec::with_capacity(1 << 16),
+            buf: Vec::with_capacity(LAS_WRITE_BYTES + (1 << 16)),
         };
         let header = w.header();
         let vlrs = w.vlrs()?;
@@ -341,7 +346,7 @@ impl LasWriter {
             by_return: [0; 15],
             min: [i32::MAX; 3],
             max: [i32::MIN; 3],
-            buf: Vec::with_capacity(1 << 16),
+            buf: Vec::with_capacity(LAS_WRITE_BYTES + (1 << 16)),
         };
         for (i, n) in w.by_return.iter_mut().enumerate() {
             *n = u64_at(255 + 8 * i);
@@ -588,8 +593,32 @@ impl LasWriter {
     }
 
     /// Encodes the points (and writes their waveform packets).
+    /// Encodes a block of points after the records gathered so far, and
+    /// passes them on once they fill [`LAS_WRITE_BYTES`] (uncompressed) or
+    /// at once (to the compressor). A block that fails leaves no record.
     fn encode(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
+        let start = self.buf.len();
+        let before = (self.count, self.by_return, self.min, self.max);
+        if let Err(e) = self.encode_records(points, waveforms) {
+            self.buf.truncate(start);
+            (self.count, self.by_return, self.min, self.max) = before;
+            return Err(e);
+        }
+        let r = match &mut self.body {
+            Body::Plain if self.buf.len() < LAS_WRITE_BYTES => return Ok(()),
+            Body::Plain => self.file.write_unbuffered(&self.buf),
+            Body::Laz(c) => c.compress_many(&self.buf),
+        };
         self.buf.clear();
+        r.map_err(|e| self.file.error(e))
+    }
+
+    /// Appends the records of `points` to the buffer.
+    fn encode_records(
+        &mut self,
+        points: &[PointRecord],
+        waveforms: &WaveformBlock,
+    ) -> io::Result<()> {
         let mut cursor = 0;
         // (pulse key, wave packet fields) of the packet last written.
         let mut current: Option<((u16, u64), WavePacketLink)> = None;
@@ -688,11 +717,7 @@ impl LasWriter {
             self.count += 1;
             self.by_return[usize::from(rn) - 1] += 1;
         }
-        let r = match &mut self.body {
-            Body::Plain => self.file.writer().write_all(&self.buf),
-            Body::Laz(c) => c.compress_many(&self.buf),
-        };
-        r.map_err(|e| self.file.error(e))
+        Ok(())
     }
 }
 
@@ -817,6 +842,12 @@ impl PointSink for LasWriter {
     }
 
     fn finish(mut self: Box<Self>) -> io::Result<()> {
+        if !self.buf.is_empty() {
+            let rest = std::mem::take(&mut self.buf);
+            self.file
+                .write_unbuffered(&rest)
+                .map_err(|e| self.file.error(e))?;
+        }
         if let Body::Laz(mut c) = std::mem::replace(&mut self.body, Body::Plain) {
             c.done().map_err(|e| self.file.error(e))?;
             self.file.put_writer(c.into_inner());
@@ -850,6 +881,7 @@ impl PointSink for LasWriter {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::DVec3;
 
     #[test]
     fn digitizer_counts_span_minus_a_sixteenth_to_full_scale() {
@@ -869,6 +901,92 @@ mod tests {
             Digitizer::with_full_scale(500, f64::NAN).offset,
             -1.0 / 16.0
         );
+    }
+
+    fn point(x: f64, t: f64) -> PointRecord {
+        PointRecord {
+            position_m: DVec3::new(x, 2.0, 3.0),
+            gps_time_s: t,
+            intensity: 7,
+            amplitude: 1.0,
+            echo_width_ns: 4.0,
+            range_m: 500.0,
+            beam_dir: DVec3::new(0.0, 0.0, -1.0),
+            error_m: DVec3::ZERO,
+            return_number: 1,
+            number_of_returns: 1,
+            scan_direction_positive: true,
+            edge_of_flight_line: false,
+            scan_angle_deg: 0.0,
+            classification: 2,
+            point_source_id: 1,
+            pulse_index: 0,
+            object_id: 0,
+            incidence_angle_deg: Some(0.0),
+            echo_time_ps: 0.0,
+            component: 0,
+        }
+    }
+
+    /// Records are gathered into megabyte writes across blocks, and a block
+    /// with a coordinate the file cannot hold is refused whole: the file
+    /// then holds exactly the points of the other blocks, in order, as the
+    /// `las` crate reads them back.
+    #[test]
+    fn gathered_blocks_and_a_refused_block() {
+        let dir = std::env::temp_dir().join(format!("lidarsim-las-blocks-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("blocks.las");
+        let settings = LasSettings {
+            scale_m: 0.001,
+            offset_m: [0.0; 3],
+            origin_m: [0.0; 3],
+            adjusted_standard_gps_time: false,
+            file_source_id: 1,
+            creation_day_year: (1, 2026),
+            generating_software: "test".into(),
+            attribute_extra_bytes: true,
+            error_extra_bytes: false,
+            crs_wkt: None,
+            compressed: false,
+            waveform: None,
+            waveform_file_shared: false,
+        };
+        let mut w = LasWriter::create(&path, settings).unwrap();
+        let len = usize::from(w.record_len());
+        // Blocks of 3 000 points, so that a few blocks fill a write.
+        let per_block = 3000;
+        let blocks = 2 * LAS_WRITE_BYTES / (per_block * len) + 2;
+        let mut want = Vec::new();
+        for b in 0..blocks {
+            let block: Vec<PointRecord> = (0..per_block)
+                .map(|i| point((b * per_block + i) as f64 * 0.01, b as f64))
+                .collect();
+            w.write(&block).unwrap();
+            want.extend(block.iter().map(|p| p.position_m.x));
+            if b == 1 {
+                // 1e9 m / 1 mm does not fit an i32: the block is refused.
+                let mut bad = block.clone();
+                bad[per_block / 2].position_m.x = 1e9;
+                assert!(w.write(&bad).is_err());
+            }
+        }
+        Box::new(w).finish().unwrap();
+        let mut reader = ::las::Reader::from_path(&path).unwrap();
+        assert_eq!(reader.header().number_of_points(), want.len() as u64);
+        let bounds = reader.header().bounds();
+        assert!((bounds.max.x - want[want.len() - 1]).abs() < 1e-6);
+        let got: Vec<f64> = reader
+            .read_all()
+            .unwrap()
+            .points()
+            .map(|p| p.unwrap().x)
+            .collect();
+        assert_eq!(got.len(), want.len());
+        for (g, w) in got.iter().zip(&want) {
+            assert!((g - w).abs() < 1e-6, "{g} vs {w}");
+        }
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

@@ -358,6 +358,16 @@ impl AtomicFile {
         self.writer.as_mut().expect("writer present until commit")
     }
 
+    /// Writes bytes the caller has gathered into large pieces itself (a
+    /// megabyte of point records): what the buffer holds goes first, then
+    /// the bytes go to the file directly, without being copied into the
+    /// buffer on the way.
+    pub fn write_unbuffered(&mut self, bytes: &[u8]) -> io::Result<()> {
+        let w = self.writer();
+        w.flush()?;
+        w.get_mut().write_all(bytes)
+    }
+
     /// Lends the buffered writer out (to a compressor that owns its output);
     /// give it back with [`AtomicFile::put_writer`] before committing. The
     /// partial file is still removed if `self` is dropped meanwhile.
