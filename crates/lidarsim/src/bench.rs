@@ -319,7 +319,7 @@ pub struct RunFigures {
     /// FNV-1a hash of the LAS file written, to show that thread counts
     /// give identical output.
     pub las_hash: u64,
-    /// CPU seconds (user + system) the whole process spent in the run:
+    /// CPU seconds the whole process spent in the run:
     /// divided by `seconds`, how many cores it kept busy (`None` where the
     /// platform does not tell).
     pub cpu_s: Option<f64>,
@@ -353,29 +353,45 @@ impl RunFigures {
     }
 }
 
-/// CPU seconds (user + system) used so far by this process
-/// (`RUSAGE_SELF`) or by the calling thread (`RUSAGE_THREAD`); Linux only.
+/// CPU seconds used so far by this process (`CLOCK_PROCESS_CPUTIME_ID`)
+/// or by the calling thread (`CLOCK_THREAD_CPUTIME_ID`); Linux only. These
+/// clocks include the time since the last scheduler tick, unlike
+/// `getrusage`, whose figures move in ticks (milliseconds): too coarse for
+/// a writer's calls of a few microseconds each.
 #[cfg(target_os = "linux")]
 fn cpu_seconds(thread: bool) -> Option<f64> {
-    let who = if thread {
-        libc::RUSAGE_THREAD
+    let clock = if thread {
+        libc::CLOCK_THREAD_CPUTIME_ID
     } else {
-        libc::RUSAGE_SELF
+        libc::CLOCK_PROCESS_CPUTIME_ID
     };
-    // SAFETY: `getrusage` only writes the struct it is given, which is
-    // plain data and valid when zeroed.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    if unsafe { libc::getrusage(who, &mut usage) } != 0 {
+    let mut t = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `clock_gettime` only writes the struct it is given.
+    if unsafe { libc::clock_gettime(clock, &mut t) } != 0 {
         return None;
     }
-    let secs = |t: libc::timeval| t.tv_sec as f64 + t.tv_usec as f64 * 1e-6;
-    Some(secs(usage.ru_utime) + secs(usage.ru_stime))
+    Some(t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9)
 }
 
 /// CPU time is not read on this platform.
 #[cfg(not(target_os = "linux"))]
 fn cpu_seconds(_thread: bool) -> Option<f64> {
     None
+}
+
+/// CPU seconds (user + system) this process has used so far; `None` where
+/// the platform does not tell (only Linux is read).
+pub fn process_cpu_seconds() -> Option<f64> {
+    cpu_seconds(false)
+}
+
+/// CPU seconds (user + system) the calling thread has used so far; `None`
+/// where the platform does not tell (only Linux is read).
+pub fn thread_cpu_seconds() -> Option<f64> {
+    cpu_seconds(true)
 }
 
 /// 64-bit FNV-1a hash of a LAS file without its creation day and year (header
@@ -415,7 +431,7 @@ pub fn measure(
     for &n in threads {
         let path = work_dir.join(format!("{}-{n}.las", scene.name()));
         let settings = las_settings(&survey, &bvh as &dyn RayCaster);
-        let (cpu0, writer0) = (cpu_seconds(false), cpu_seconds(true));
+        let (cpu0, writer0) = (process_cpu_seconds(), thread_cpu_seconds());
         let t = Instant::now();
         let mut las = LasWriter::create(&path, settings).map_err(|e| e.to_string())?;
         let counts = sim
@@ -424,8 +440,8 @@ pub fn measure(
         Box::new(las).finish().map_err(|e| e.to_string())?;
         let seconds = t.elapsed().as_secs_f64();
         let used = |a: Option<f64>, b: Option<f64>| Some(b? - a?);
-        let cpu_s = used(cpu0, cpu_seconds(false));
-        let writer_cpu_s = used(writer0, cpu_seconds(true));
+        let cpu_s = used(cpu0, process_cpu_seconds());
+        let writer_cpu_s = used(writer0, thread_cpu_seconds());
         let las_hash = fnv1a(&path).map_err(|e| e.to_string())?;
         let _ = std::fs::remove_file(&path);
         runs.push(RunFigures {
