@@ -51,33 +51,28 @@ impl PointSink for XyzWriter {
         for p in points {
             let b = &mut self.line;
             push_fixed(b, p.position_m.x + o[0], 3);
-            b.push(b' ');
-            push_fixed(b, p.position_m.y + o[1], 3);
-            b.push(b' ');
-            push_fixed(b, p.position_m.z + o[2], 3);
-            for v in [
-                u64::from(p.intensity),
-                u64::from(p.return_number),
-                u64::from(p.number_of_returns),
-                u64::from(p.classification),
-            ] {
+            // The other columns, each after a space, in `XYZ_COLUMNS` order.
+            let fixed = |b: &mut Vec<u8>, v: f64, decimals: u32| {
+                b.push(b' ');
+                push_fixed(b, v, decimals);
+            };
+            let integer = |b: &mut Vec<u8>, v: u64| {
                 b.push(b' ');
                 push_u64(b, v);
-            }
-            b.push(b' ');
-            push_fixed(b, p.gps_time_s, 9);
-            b.push(b' ');
-            push_fixed(b, p.scan_angle_deg, 3);
-            b.push(b' ');
-            push_u64(b, u64::from(p.point_source_id));
-            b.push(b' ');
-            push_fixed(b, p.amplitude, 6);
-            b.push(b' ');
-            push_fixed(b, p.echo_width_ns, 3);
-            b.push(b' ');
-            push_fixed(b, p.range_m, 4);
-            b.push(b' ');
-            push_u64(b, u64::from(p.component));
+            };
+            fixed(b, p.position_m.y + o[1], 3);
+            fixed(b, p.position_m.z + o[2], 3);
+            integer(b, u64::from(p.intensity));
+            integer(b, u64::from(p.return_number));
+            integer(b, u64::from(p.number_of_returns));
+            integer(b, u64::from(p.classification));
+            fixed(b, p.gps_time_s, 9);
+            fixed(b, p.scan_angle_deg, 3);
+            integer(b, u64::from(p.point_source_id));
+            fixed(b, p.amplitude, 6);
+            fixed(b, p.echo_width_ns, 3);
+            fixed(b, p.range_m, 4);
+            integer(b, u64::from(p.component));
             b.push(b'\n');
         }
         if let Err(e) = self.file.writer().write_all(&self.line) {
