@@ -592,7 +592,6 @@ impl LasWriter {
         h
     }
 
-    /// Encodes the points (and writes their waveform packets).
     /// Encodes a block of points after the records gathered so far, and
     /// passes them on once they fill [`LAS_WRITE_BYTES`] (uncompressed) or
     /// at once (to the compressor). A block that fails leaves no record.
@@ -613,7 +612,8 @@ impl LasWriter {
         r.map_err(|e| self.file.error(e))
     }
 
-    /// Appends the records of `points` to the buffer.
+    /// Appends the records of `points` to the buffer (and writes their
+    /// waveform packets).
     fn encode_records(
         &mut self,
         points: &[PointRecord],
