@@ -17,7 +17,7 @@ pub struct XyzWriter {
     file: AtomicFile,
     origin_m: [f64; 3],
     /// The lines of the block being written.
-    line: Vec<u8>,
+    block: Vec<u8>,
 }
 
 impl XyzWriter {
@@ -29,7 +29,7 @@ impl XyzWriter {
         Ok(Self {
             file,
             origin_m,
-            line: Vec::with_capacity(1 << 16),
+            block: Vec::with_capacity(1 << 16),
         })
     }
 
@@ -39,7 +39,7 @@ impl XyzWriter {
         Ok(Self {
             file: AtomicFile::reopen(path, len)?,
             origin_m,
-            line: Vec::with_capacity(1 << 16),
+            block: Vec::with_capacity(1 << 16),
         })
     }
 }
@@ -47,19 +47,20 @@ impl XyzWriter {
 impl PointSink for XyzWriter {
     fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
         let o = self.origin_m;
-        self.line.clear();
+        // The columns after the first, each after a space.
+        let fixed = |b: &mut Vec<u8>, v: f64, decimals: u32| {
+            b.push(b' ');
+            push_fixed(b, v, decimals);
+        };
+        let integer = |b: &mut Vec<u8>, v: u64| {
+            b.push(b' ');
+            push_u64(b, v);
+        };
+        self.block.clear();
         for p in points {
-            let b = &mut self.line;
+            let b = &mut self.block;
+            // In `XYZ_COLUMNS` order.
             push_fixed(b, p.position_m.x + o[0], 3);
-            // The other columns, each after a space, in `XYZ_COLUMNS` order.
-            let fixed = |b: &mut Vec<u8>, v: f64, decimals: u32| {
-                b.push(b' ');
-                push_fixed(b, v, decimals);
-            };
-            let integer = |b: &mut Vec<u8>, v: u64| {
-                b.push(b' ');
-                push_u64(b, v);
-            };
             fixed(b, p.position_m.y + o[1], 3);
             fixed(b, p.position_m.z + o[2], 3);
             integer(b, u64::from(p.intensity));
@@ -75,7 +76,7 @@ impl PointSink for XyzWriter {
             integer(b, u64::from(p.component));
             b.push(b'\n');
         }
-        if let Err(e) = self.file.writer().write_all(&self.line) {
+        if let Err(e) = self.file.writer().write_all(&self.block) {
             return Err(self.file.error(e));
         }
         Ok(())
