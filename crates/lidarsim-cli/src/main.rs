@@ -50,7 +50,8 @@ enum Command {
         /// Output directory.
         #[arg(short, long, default_value = "demo-out")]
         output: PathBuf,
-        /// Worker threads (default: all cores).
+        /// Threads, the one writing the output among them (default: all
+        /// cores).
         #[arg(long)]
         threads: Option<usize>,
         /// Seed of all random streams (overrides the demo's).
@@ -69,7 +70,8 @@ enum Command {
         /// Output directory.
         #[arg(short, long, default_value = "out", conflicts_with = "resume")]
         output: PathBuf,
-        /// Worker threads (default: all cores).
+        /// Threads, the one writing the output among them (default: all
+        /// cores).
         #[arg(long)]
         threads: Option<usize>,
         /// Seed of all random streams (overrides the file's).
@@ -330,12 +332,12 @@ fn bench(
                     r.points as f64 / r.seconds
                 );
                 println!("{name} threads {t} las_fnv1a {:016x}", r.las_hash);
-                if let (Some(cpu), Some(busy), Some(writer)) =
-                    (r.cpu_s, r.cores_busy(), r.writer_cpu_s)
+                if let (Some(cpu), Some(busy), Some(write)) =
+                    (r.cpu_s, r.cores_busy(), r.write_cpu_s)
                 {
                     println!("{name} threads {t} cpu_s {cpu:.3}");
                     println!("{name} threads {t} cores_busy {busy:.2}");
-                    println!("{name} threads {t} writer_cpu_s {writer:.3}");
+                    println!("{name} threads {t} write_cpu_s {write:.3}");
                 }
             }
             if let [a, b, ..] = &f.runs[..] {

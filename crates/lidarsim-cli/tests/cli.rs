@@ -552,8 +552,9 @@ fn waveform_replays_a_run_over_a_relative_terrain_raster() {
 
 /// `lidarsim bench` on a short flat run: one `scene key value` line per
 /// figure, the same LAS on 1 and 2 threads, and CPU figures that are
-/// consistent with each other (the writer thread is part of the process, and
-/// a run cannot keep more cores busy than it has threads plus the writer).
+/// consistent with each other (writing is part of the process's work, and a
+/// run keeps no more cores busy than it has threads: the thread that writes
+/// is one of them).
 #[test]
 fn bench_prints_figures_a_script_can_read() {
     let dir = temp("bench");
@@ -588,11 +589,12 @@ fn bench_prints_figures_a_script_can_read() {
             num(&format!("threads {t} seconds ")),
             num(&format!("threads {t} cpu_s ")),
         );
-        let writer = num(&format!("threads {t} writer_cpu_s "));
+        let write = num(&format!("threads {t} write_cpu_s "));
         assert!(seconds > 0.0 && cpu > 0.0, "{text}");
-        assert!((0.0..=cpu).contains(&writer), "{text}");
-        // Timer and CPU clocks tick differently: a little slack.
-        assert!(cpu <= (t as f64 + 1.0) * seconds + 0.02, "{text}");
+        assert!(write > 0.0 && write < cpu, "{text}");
+        // Timer and CPU clocks tick differently, and both are printed
+        // rounded to a millisecond: a little slack.
+        assert!(cpu <= t as f64 * seconds + 0.003, "{text}");
     }
     // At equal CPU per pulse, the speed-up is the ratio of the busy cores
     // (both printed rounded to 0.01).

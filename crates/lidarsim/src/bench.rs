@@ -21,11 +21,11 @@
 use std::fmt::Write as _;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use crate::Survey;
 use crate::accel::{Bvh, RayCaster};
-use crate::output::{LasWriter, PointSink};
+use crate::output::{LasWriter, PointRecord, PointSink, WaveformBlock};
 use crate::run::las_settings;
 use crate::sim::Simulator;
 
@@ -323,10 +323,12 @@ pub struct RunFigures {
     /// divided by `seconds`, how many cores it kept busy (`None` where the
     /// platform does not tell).
     pub cpu_s: Option<f64>,
-    /// CPU seconds of the calling thread, which puts the blocks in order and
-    /// writes the LAS file while the workers simulate: the serial part that
-    /// shares the cores with them.
-    pub writer_cpu_s: Option<f64>,
+    /// CPU seconds spent writing the LAS file: encoding the points and the
+    /// kernel's write path, read from the CPU clock of the thread that
+    /// writes (the calling thread, which simulates blocks too) around each
+    /// block's write and the final header and sync. It is the serial part
+    /// of a run: however many threads simulate, one writes.
+    pub write_cpu_s: Option<f64>,
 }
 
 impl RunFigures {
@@ -394,6 +396,87 @@ pub fn thread_cpu_seconds() -> Option<f64> {
     cpu_seconds(true)
 }
 
+/// A sink that times the calls into the sink it wraps, so that a writer's
+/// share of a run can be told from the simulation around it: wall-clock
+/// time (which includes waits for a core and for the disk) and CPU time of
+/// the calling thread, around every write and the finish.
+pub struct TimedSink {
+    inner: Box<dyn PointSink>,
+    spent: Duration,
+    cpu_s: Option<f64>,
+    points: u64,
+}
+
+/// What a [`TimedSink`] measured over its whole output.
+#[derive(Clone, Copy, Debug)]
+pub struct WriteTime {
+    /// Points written.
+    pub points: u64,
+    /// Wall-clock seconds spent in the wrapped sink.
+    pub seconds: f64,
+    /// CPU seconds spent in the wrapped sink (`None` where the platform
+    /// does not tell).
+    pub cpu_s: Option<f64>,
+}
+
+impl TimedSink {
+    /// Wraps `inner`.
+    pub fn new(inner: Box<dyn PointSink>) -> Self {
+        Self {
+            inner,
+            spent: Duration::ZERO,
+            cpu_s: Some(0.0),
+            points: 0,
+        }
+    }
+
+    /// Runs `f` on the wrapped sink, adding its wall-clock and CPU time.
+    fn timed<R>(&mut self, f: impl FnOnce(&mut Box<dyn PointSink>) -> R) -> R {
+        let (t, c0) = (Instant::now(), thread_cpu_seconds());
+        let r = f(&mut self.inner);
+        let c1 = thread_cpu_seconds();
+        self.spent += t.elapsed();
+        self.cpu_s = self.cpu_s.and_then(|s| Some(s + c1? - c0?));
+        r
+    }
+
+    /// Finishes the wrapped sink (timed too) and returns the times.
+    pub fn finish_timed(self) -> io::Result<WriteTime> {
+        let Self {
+            inner,
+            mut spent,
+            cpu_s,
+            points,
+        } = self;
+        let (t, c0) = (Instant::now(), thread_cpu_seconds());
+        inner.finish()?;
+        let c1 = thread_cpu_seconds();
+        spent += t.elapsed();
+        Ok(WriteTime {
+            points,
+            seconds: spent.as_secs_f64(),
+            cpu_s: cpu_s.and_then(|s| Some(s + c1? - c0?)),
+        })
+    }
+}
+
+impl PointSink for TimedSink {
+    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+        self.points += points.len() as u64;
+        self.timed(|s| s.write(points))
+    }
+    fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
+        self.points += points.len() as u64;
+        self.timed(|s| s.write_block(points, waveforms))
+    }
+    fn finish(self: Box<Self>) -> io::Result<()> {
+        self.finish_timed().map(|_| ())
+    }
+    fn discard(self: Box<Self>) {
+        self.inner.discard();
+    }
+}
+
 /// 64-bit FNV-1a hash of a LAS file without its creation day and year (header
 /// bytes 90–93, LAS 1.4 R15 Table 3), so that runs on different days
 /// compare.
@@ -431,17 +514,17 @@ pub fn measure(
     for &n in threads {
         let path = work_dir.join(format!("{}-{n}.las", scene.name()));
         let settings = las_settings(&survey, &bvh as &dyn RayCaster);
-        let (cpu0, writer0) = (process_cpu_seconds(), thread_cpu_seconds());
+        let cpu0 = process_cpu_seconds();
         let t = Instant::now();
-        let mut las = LasWriter::create(&path, settings).map_err(|e| e.to_string())?;
+        let las = LasWriter::create(&path, settings).map_err(|e| e.to_string())?;
+        let mut las = TimedSink::new(Box::new(las));
         let counts = sim
             .run(n, &mut [&mut las as &mut dyn PointSink], &|_| {})
             .map_err(|e| e.to_string())?;
-        Box::new(las).finish().map_err(|e| e.to_string())?;
+        let write = las.finish_timed().map_err(|e| e.to_string())?;
         let seconds = t.elapsed().as_secs_f64();
-        let used = |a: Option<f64>, b: Option<f64>| Some(b? - a?);
-        let cpu_s = used(cpu0, process_cpu_seconds());
-        let writer_cpu_s = used(writer0, thread_cpu_seconds());
+        let cpu_s = process_cpu_seconds().zip(cpu0).map(|(b, a)| b - a);
+        let write_cpu_s = write.cpu_s;
         let las_hash = fnv1a(&path).map_err(|e| e.to_string())?;
         let _ = std::fs::remove_file(&path);
         runs.push(RunFigures {
@@ -452,7 +535,7 @@ pub fn measure(
             seconds,
             las_hash,
             cpu_s,
-            writer_cpu_s,
+            write_cpu_s,
         });
     }
     Ok(SceneFigures {
@@ -478,7 +561,7 @@ mod tests {
             seconds,
             las_hash: 0,
             cpu_s,
-            writer_cpu_s: None,
+            write_cpu_s: None,
         }
     }
 

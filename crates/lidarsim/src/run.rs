@@ -30,7 +30,8 @@ pub struct RunError {
 
 /// How to run.
 pub struct RunOptions<'a> {
-    /// Worker threads (≥ 1).
+    /// Threads (≥ 1), the calling thread among them: it writes the
+    /// blocks in order and simulates blocks in between.
     pub threads: usize,
     /// Called with the number of pulses simulated so far (those of an
     /// interrupted run included when resuming).
@@ -83,7 +84,7 @@ pub struct Summary {
     pub point_file_bytes: Option<BTreeMap<String, u64>>,
     /// Seed of the random streams.
     pub seed: u64,
-    /// Worker threads.
+    /// Threads the run used (the one that wrote the output among them).
     pub threads: usize,
     /// Pulses emitted.
     pub pulses: u64,

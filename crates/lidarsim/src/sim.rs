@@ -5,7 +5,8 @@
 //! closest hits → Eq. 2 per sub-ray (with speckle) → waveform → echoes →
 //! georeferenced points (Eq. 1 on the central ray) with ground-truth
 //! classes. Pulses are independent; blocks of pulses run in parallel on
-//! worker threads and are handed to the sinks in pulse order, so the output
+//! the run's threads and are handed to the sinks in pulse order by the
+//! calling thread, itself one of them, so the output
 //! is the same for any number of threads and memory does not grow with the
 //! length of the flight.
 
@@ -635,8 +636,11 @@ impl<'a> Simulator<'a> {
         (points, counts)
     }
 
-    /// Simulates every pulse of every flight line on `threads` worker
-    /// threads and writes the points, in pulse order, to `sinks`.
+    /// Simulates every pulse of every flight line on `threads` threads and
+    /// writes the points, in pulse order, to `sinks`. The calling thread is
+    /// one of the `threads`: it writes each block as soon as the blocks
+    /// before it are written and simulates blocks in between, so one
+    /// thread runs everything in turn on the caller.
     /// `progress` is called with the number of pulses done so far.
     /// The sinks are not finished here.
     pub fn run(
@@ -694,19 +698,34 @@ impl<'a> Simulator<'a> {
         }
         let stopped = || control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
 
-        // Workers take the blocks in order from a shared counter, at most
-        // `window` blocks ahead of the writer, which puts them back in
-        // order: no barrier between batches, memory bounded by the window.
+        // `threads` threads take the blocks in order from a shared counter,
+        // at most `window` blocks ahead of the writer, which puts them back
+        // in order: no barrier between batches, memory bounded by the
+        // window. The calling thread is one of them: it writes every block
+        // that is next in order as soon as it has it and simulates a block
+        // itself whenever none is, so a run keeps exactly `threads` cores
+        // busy (one thread: no other thread at all) and the writer's work
+        // is shared like the pulses' rather than taken from a core the
+        // workers do not use.
         let window = 4 * threads;
         let next_job = AtomicUsize::new(0);
         let abort = AtomicBool::new(false);
         let written = (Mutex::new(0usize), Condvar::new());
         type Block = (Vec<PointRecord>, RunCounts, WaveformBlock);
+        let simulate = |j: usize, scratch: &mut Scratch| -> Block {
+            let (l, k0, k1) = jobs[j];
+            let mut waves = WaveformBlock::default();
+            let record = self.record_waveforms.then_some(&mut waves);
+            let (points, counts) =
+                self.simulate_block_recording(&self.survey.lines[l], k0, k1, scratch, record);
+            (points, counts, waves)
+        };
         let (tx, rx) = mpsc::channel::<(usize, Block)>();
         std::thread::scope(|scope| {
-            for _ in 0..threads {
+            for _ in 1..threads {
                 let tx = tx.clone();
                 let (jobs, next_job, abort, written) = (&jobs, &next_job, &abort, &written);
+                let simulate = &simulate;
                 scope.spawn(move || {
                     let mut scratch = Scratch::default();
                     loop {
@@ -714,9 +733,9 @@ impl<'a> Simulator<'a> {
                             return;
                         }
                         let j = next_job.fetch_add(1, Ordering::SeqCst);
-                        let Some(&(l, k0, k1)) = jobs.get(j) else {
+                        if j >= jobs.len() {
                             return;
-                        };
+                        }
                         // Wait until the writer is within the window.
                         {
                             let (lock, cv) = written;
@@ -725,25 +744,26 @@ impl<'a> Simulator<'a> {
                                 w = cv.wait(w).unwrap_or_else(|e| e.into_inner());
                             }
                         }
-                        let line = &self.survey.lines[l];
-                        let mut waves = WaveformBlock::default();
-                        let record = self.record_waveforms.then_some(&mut waves);
-                        let (points, counts) =
-                            self.simulate_block_recording(line, k0, k1, &mut scratch, record);
-                        if tx.send((j, (points, counts, waves))).is_err() {
+                        if tx.send((j, simulate(j, &mut scratch))).is_err() {
                             return;
                         }
                     }
                 });
             }
             drop(tx);
-            // The writer: blocks in job order to every sink.
+            // The calling thread: blocks in job order to every sink, and a
+            // block of its own whenever the next one in order is not there.
+            let mut scratch = Scratch::default();
             let mut total = RunCounts::default();
             let mut pending = std::collections::BTreeMap::new();
             let mut done = 0usize;
             let mut result = Ok(());
-            for (j, block) in rx.iter() {
-                pending.insert(j, block);
+            let mut workers_left = threads > 1;
+            loop {
+                while let Ok((j, block)) = rx.try_recv() {
+                    pending.insert(j, block);
+                }
+                let before = done;
                 while let Some((points, counts, waves)) = pending.remove(&done) {
                     for sink in sinks.iter_mut() {
                         if let Err(e) = sink.write_block(&points, &waves) {
@@ -767,7 +787,38 @@ impl<'a> Simulator<'a> {
                     cv.notify_all();
                     break;
                 }
-                progress(total.pulses);
+                if done > before {
+                    progress(total.pulses);
+                }
+                // Take the next block when it is within the window (the
+                // writer cannot wait for itself). A block that the workers
+                // still simulate is then written after this one.
+                let j = next_job.load(Ordering::SeqCst);
+                if !stopped()
+                    && j < jobs.len()
+                    && j < done + window
+                    && next_job
+                        .compare_exchange(j, j + 1, Ordering::SeqCst, Ordering::SeqCst)
+                        .is_ok()
+                {
+                    pending.insert(j, simulate(j, &mut scratch));
+                    continue;
+                }
+                if j < jobs.len() && j < done + window && !stopped() {
+                    continue; // a worker took job `j` first: try again
+                }
+                // Nothing to simulate here: wait for a worker's block, or
+                // end once every worker has ended and the blocks in order
+                // are written (a gap left by a stop stays unwritten).
+                if !workers_left {
+                    break;
+                }
+                match rx.recv() {
+                    Ok((j, block)) => {
+                        pending.insert(j, block);
+                    }
+                    Err(_) => workers_left = false,
+                }
             }
             drop(rx);
             result?;

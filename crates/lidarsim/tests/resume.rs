@@ -12,10 +12,14 @@
 //! the output directory's survey.toml.
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use lidarsim::Survey;
+use lidarsim::accel::Bvh;
+use lidarsim::output::{PointRecord, PointSink};
 use lidarsim::run::{RunOptions, Summary, run_to_dir};
+use lidarsim::sim::{BLOCK_PULSES, PulsePosition, RunControl, Simulator};
 
 /// Two lines of 1.2 s at 20 kHz (12 blocks of 2048 pulses each), GNSS/IMU
 /// errors on (LAS extra bytes), LAS and XYZ.
@@ -307,4 +311,76 @@ fn resume_refuses_changed_files() {
     let e = run_to_dir(&other, &part, &o).unwrap_err();
     assert!(e.to_string().contains("seed"), "{e}");
     std::fs::remove_dir_all(&part).ok();
+}
+
+/// Counts the blocks written to it and raises a stop flag at the first.
+struct StopAtFirstBlock {
+    stop: Arc<AtomicBool>,
+    blocks: Arc<AtomicU32>,
+    writer: std::thread::ThreadId,
+}
+
+impl PointSink for StopAtFirstBlock {
+    fn write(&mut self, _points: &[PointRecord]) -> std::io::Result<()> {
+        assert_eq!(
+            std::thread::current().id(),
+            self.writer,
+            "written off the caller"
+        );
+        self.blocks.fetch_add(1, Ordering::SeqCst);
+        self.stop.store(true, Ordering::SeqCst);
+        Ok(())
+    }
+    fn finish(self: Box<Self>) -> std::io::Result<()> {
+        Ok(())
+    }
+    fn discard(self: Box<Self>) {}
+}
+
+/// One thread is one thread: the calling thread simulates a block, writes
+/// it, and only then takes the next, so a stop raised while the first block
+/// is written leaves exactly that block. (With a worker thread beside the
+/// writer, the worker would have simulated the next blocks meanwhile, and
+/// the writer, having them in order, would write them.) With two threads the
+/// calling thread writes too, and what was written is a prefix of whole
+/// blocks ending where the outcome says.
+#[test]
+fn one_thread_simulates_and_writes_in_turn_on_the_calling_thread() {
+    let s = survey();
+    let bvh = Bvh::build(s.scene.clone());
+    let sim = Simulator::new(&s, &bvh);
+    for threads in [1, 2] {
+        let stop = Arc::new(AtomicBool::new(false));
+        let blocks = Arc::new(AtomicU32::new(0));
+        let mut sink = StopAtFirstBlock {
+            stop: Arc::clone(&stop),
+            blocks: Arc::clone(&blocks),
+            writer: std::thread::current().id(),
+        };
+        let control = RunControl {
+            stop: Some(&*stop),
+            ..RunControl::default()
+        };
+        let out = sim
+            .run_from(threads, &mut [&mut sink], &|_| {}, &control)
+            .unwrap();
+        let written = u64::from(blocks.load(Ordering::SeqCst));
+        assert!(written >= 1);
+        if threads == 1 {
+            assert_eq!(written, 1, "one thread wrote {written} blocks");
+        }
+        assert_eq!(
+            out.counts.pulses,
+            written * BLOCK_PULSES,
+            "{threads} threads"
+        );
+        assert_eq!(
+            out.stopped_at,
+            Some(PulsePosition {
+                line: 0,
+                pulse: written * BLOCK_PULSES
+            }),
+            "{threads} threads"
+        );
+    }
 }
