@@ -353,7 +353,20 @@ fn bench(
                         a.threads, b.threads
                     );
                 }
-                println!("{name} identical_output {}", a.las_hash == b.las_hash);
+                println!(
+                    "{name} identical_output {}",
+                    f.runs.iter().all(|r| r.las_hash == a.las_hash)
+                );
+                let pairs = lidarsim::bench::pair_speedups(&f.runs);
+                if pairs.len() > 1
+                    && let Some(m) = lidarsim::bench::median(&pairs)
+                {
+                    println!("{name} scaling_pairs {}", pairs.len());
+                    println!(
+                        "{name} scaling_{}_to_{}_median {m:.2}",
+                        a.threads, b.threads
+                    );
+                }
             }
             if let Some(bytes) = f.peak_rss_bytes {
                 println!("{name} peak_rss_mb {:.1}", bytes as f64 / 1048576.0);

@@ -550,8 +550,9 @@ fn waveform_replays_a_run_over_a_relative_terrain_raster() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `lidarsim bench` on a short flat run: one `scene key value` line per
-/// figure, the same LAS on 1 and 2 threads, and CPU figures that are
+/// `lidarsim bench` on short flat runs, 1, 2, 1 and 2 threads: one `scene
+/// key value` line per figure, the same LAS on 1 and 2 threads, the median
+/// speed-up over the two pairs, and CPU figures that are
 /// consistent with each other (writing is part of the process's work, and a
 /// run keeps no more cores busy than it has threads: the thread that writes
 /// is one of them).
@@ -564,7 +565,7 @@ fn bench_prints_figures_a_script_can_read() {
             "--scene",
             "flat",
             "--threads",
-            "1,2",
+            "1,2,1,2",
             "--pulses",
             "20000",
         ])
@@ -607,6 +608,23 @@ fn bench_prints_figures_a_script_can_read() {
         value("threads 1 las_fnv1a"),
         value("threads 2 las_fnv1a"),
         "thread counts must write the same LAS"
+    );
+    assert_eq!(value("identical_output "), "true");
+    // Two pairs of runs: the median of two speed-ups is their mean.
+    let rates = |t: u32| -> Vec<f64> {
+        let key = format!("flat threads {t} pulses_per_s ");
+        text.lines()
+            .filter_map(|l| l.strip_prefix(key.as_str()))
+            .map(|v| v.parse().unwrap())
+            .collect()
+    };
+    let (one, two) = (rates(1), rates(2));
+    assert_eq!((one.len(), two.len()), (2, 2), "{text}");
+    assert_eq!(num("scaling_pairs "), 2.0);
+    let mean = (two[0] / one[0] + two[1] / one[1]) / 2.0;
+    assert!(
+        (num("scaling_1_to_2_median ") - mean).abs() < 0.006,
+        "{text}"
     );
     let _ = std::fs::remove_dir_all(&dir);
 }

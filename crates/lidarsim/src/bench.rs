@@ -355,6 +355,35 @@ impl RunFigures {
     }
 }
 
+/// The measured speed-ups of the second thread count over the first in
+/// consecutive pairs of runs (`--threads 1,2,1,2,…`): for `runs` of thread
+/// counts a, b, a, b, … the speed-ups of run 2 over run 1, run 4 over run
+/// 3, and so on, as long as the pairs repeat the first pair's counts. Each
+/// is a one-run figure; several pairs taken in turn show how much the
+/// machine's speed moved between the two runs of a pair.
+pub fn pair_speedups(runs: &[RunFigures]) -> Vec<f64> {
+    let [first, second, ..] = runs else {
+        return Vec::new();
+    };
+    runs.chunks_exact(2)
+        .take_while(|p| p[0].threads == first.threads && p[1].threads == second.threads)
+        .map(|p| p[1].pulses_per_s() / p[0].pulses_per_s())
+        .collect()
+}
+
+/// The median of `values` (the mean of the middle two for an even count);
+/// `None` when empty.
+pub fn median(values: &[f64]) -> Option<f64> {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    match n {
+        0 => None,
+        _ if n % 2 == 1 => Some(v[n / 2]),
+        _ => Some((v[n / 2 - 1] + v[n / 2]) / 2.0),
+    }
+}
+
 /// CPU seconds used so far by this process (`CLOCK_PROCESS_CPUTIME_ID`)
 /// or by the calling thread (`CLOCK_THREAD_CPUTIME_ID`); Linux only. These
 /// clocks include the time since the last scheduler tick, unlike
@@ -583,6 +612,36 @@ mod tests {
         assert!((half.speedup_at_equal_cpu(&one).unwrap() - busy).abs() < 1e-9);
         assert_eq!(run(2, 1, 1.0, None).speedup_at_equal_cpu(&one), None);
         assert_eq!(two.speedup_at_equal_cpu(&run(1, 1, 1.0, None)), None);
+    }
+
+    /// Pairs are consecutive runs with the first pair's thread counts; the
+    /// median is the middle value, or the mean of the middle two.
+    #[test]
+    fn pair_speedups_and_their_median() {
+        // 1 thread at 500 k/s, then 2 threads at 950 k/s, 1.2 M/s, 0.8 M/s
+        // against 1 thread at 500 k/s, 600 k/s, 400 k/s.
+        let runs = [
+            run(1, 500_000, 1.0, None),
+            run(2, 500_000, 500_000.0 / 950_000.0, None),
+            run(1, 600_000, 1.0, None),
+            run(2, 1_200_000, 1.0, None),
+            run(1, 400_000, 1.0, None),
+            run(2, 800_000, 1.0, None),
+            // A different pair ends the sequence.
+            run(1, 1, 1.0, None),
+            run(4, 1, 1.0, None),
+        ];
+        let s = pair_speedups(&runs);
+        assert_eq!(s.len(), 3);
+        for (got, want) in s.iter().zip([1.9, 2.0, 2.0]) {
+            assert!((got - want).abs() < 1e-12, "{s:?}");
+        }
+        assert_eq!(median(&s), Some(2.0));
+        assert!((median(&[1.9, 2.0, 1.5, 1.8]).unwrap() - 1.85).abs() < 1e-12);
+        assert_eq!(median(&[]), None);
+        assert!(pair_speedups(&runs[..1]).is_empty());
+        // An odd run at the end has no partner.
+        assert_eq!(pair_speedups(&runs[..3]).len(), 1);
     }
 
     #[test]
