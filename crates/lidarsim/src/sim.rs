@@ -794,18 +794,15 @@ impl<'a> Simulator<'a> {
                 // writer cannot wait for itself). A block that the workers
                 // still simulate is then written after this one.
                 let j = next_job.load(Ordering::SeqCst);
-                if !stopped()
-                    && j < jobs.len()
-                    && j < done + window
-                    && next_job
+                if !stopped() && j < jobs.len() && j < done + window {
+                    // A worker may take job `j` first: then look again.
+                    if next_job
                         .compare_exchange(j, j + 1, Ordering::SeqCst, Ordering::SeqCst)
                         .is_ok()
-                {
-                    pending.insert(j, simulate(j, &mut scratch));
+                    {
+                        pending.insert(j, simulate(j, &mut scratch));
+                    }
                     continue;
-                }
-                if j < jobs.len() && j < done + window && !stopped() {
-                    continue; // a worker took job `j` first: try again
                 }
                 // Nothing to simulate here: wait for a worker's block, or
                 // end once every worker has ended and the blocks in order
