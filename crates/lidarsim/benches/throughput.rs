@@ -106,11 +106,6 @@ fn demo() -> Survey {
     Survey::from_raw(lidarsim::demo::demo_survey(), None).expect("demo survey")
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    v[v.len() / 2]
-}
-
 fn bench(name: &str, survey: &Survey, threads: usize) {
     let bvh = Bvh::build(survey.scene.clone());
     let sim = Simulator::new(survey, &bvh);
@@ -126,7 +121,7 @@ fn bench(name: &str, survey: &Survey, threads: usize) {
         .collect();
     let lo = rates.iter().cloned().fold(f64::MAX, f64::min);
     let hi = rates.iter().cloned().fold(f64::MIN, f64::max);
-    let m = median(rates);
+    let m = lidarsim::bench::median(&rates).expect("REPEATS > 0");
     let rays = m * survey.scanner.subrays as f64;
     let points = m * counts.points as f64 / counts.pulses as f64;
     println!(
