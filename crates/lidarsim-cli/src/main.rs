@@ -129,7 +129,8 @@ enum Command {
         /// Scenes to measure: flat, terrain (default both).
         #[arg(long, value_delimiter = ',')]
         scene: Vec<String>,
-        /// Thread counts to run (default 1,2).
+        /// Thread counts to run, one run each in this order (default 1,2;
+        /// 1,2,1,2,… also prints the median speed-up over the pairs).
         #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2])]
         threads: Vec<usize>,
         /// Working directory for the generated files (default: a temporary one).
