@@ -306,7 +306,7 @@ pub struct SceneFigures {
 /// The figures of one run.
 #[derive(Clone, Debug)]
 pub struct RunFigures {
-    /// Worker threads.
+    /// Threads of the run (the one that writes among them).
     pub threads: usize,
     /// Pulses simulated.
     pub pulses: u64,

@@ -655,7 +655,7 @@ impl<'a> Simulator<'a> {
 
     /// [`Simulator::run`] from `control.start` on, stopping at the next
     /// block boundary once `control.stop` is set (checked before every
-    /// block a worker takes; the blocks already simulated are written
+    /// block a thread takes; the blocks already simulated are written
     /// first, as far as they follow each other).
     /// The counts are those of the pulses simulated by this call; the
     /// outcome says where it stopped, if it did.
