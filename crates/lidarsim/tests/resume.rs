@@ -316,7 +316,7 @@ fn resume_refuses_changed_files() {
 /// Counts the blocks written to it and raises a stop flag at the first.
 struct StopAtFirstBlock {
     stop: Arc<AtomicBool>,
-    blocks: Arc<AtomicU32>,
+    blocks: u64,
     writer: std::thread::ThreadId,
 }
 
@@ -327,7 +327,7 @@ impl PointSink for StopAtFirstBlock {
             self.writer,
             "written off the caller"
         );
-        self.blocks.fetch_add(1, Ordering::SeqCst);
+        self.blocks += 1;
         self.stop.store(true, Ordering::SeqCst);
         Ok(())
     }
@@ -351,10 +351,9 @@ fn one_thread_simulates_and_writes_in_turn_on_the_calling_thread() {
     let sim = Simulator::new(&s, &bvh);
     for threads in [1, 2] {
         let stop = Arc::new(AtomicBool::new(false));
-        let blocks = Arc::new(AtomicU32::new(0));
         let mut sink = StopAtFirstBlock {
             stop: Arc::clone(&stop),
-            blocks: Arc::clone(&blocks),
+            blocks: 0,
             writer: std::thread::current().id(),
         };
         let control = RunControl {
@@ -364,7 +363,7 @@ fn one_thread_simulates_and_writes_in_turn_on_the_calling_thread() {
         let out = sim
             .run_from(threads, &mut [&mut sink], &|_| {}, &control)
             .unwrap();
-        let written = u64::from(blocks.load(Ordering::SeqCst));
+        let written = sink.blocks;
         assert!(written >= 1);
         if threads == 1 {
             assert_eq!(written, 1, "one thread wrote {written} blocks");
