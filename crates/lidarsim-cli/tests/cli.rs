@@ -551,11 +551,10 @@ fn waveform_replays_a_run_over_a_relative_terrain_raster() {
 }
 
 /// `lidarsim bench` on short flat runs, 1, 2, 1 and 2 threads: one `scene
-/// key value` line per figure, the same LAS on 1 and 2 threads, the median
-/// speed-up over the two pairs, and CPU figures that are
-/// consistent with each other (writing is part of the process's work, and a
-/// run keeps no more cores busy than it has threads: the thread that writes
-/// is one of them).
+/// key value` line per figure, each a number a script can parse, and the
+/// same LAS on 1 and 2 threads. Nothing here depends on how fast the
+/// machine was: the figures' arithmetic is tested on fixed measurements
+/// (`bench_figures_are_computed_from_the_measurements` in main.rs).
 #[test]
 fn bench_prints_figures_a_script_can_read() {
     let dir = temp("bench");
@@ -582,49 +581,47 @@ fn bench_prints_figures_a_script_can_read() {
             .unwrap_or_else(|| panic!("no `flat {key}` line in\n{text}"));
         line.rsplit(' ').next().unwrap().to_string()
     };
-    let num = |key: &str| value(key).parse::<f64>().unwrap();
+    let num = |key: &str| {
+        let v = value(key).parse::<f64>().unwrap();
+        assert!(v.is_finite() && v >= 0.0, "`flat {key}` is {v}\n{text}");
+        v
+    };
     assert_eq!(num("primitives "), 62.0);
     for t in [1, 2] {
         assert_eq!(num(&format!("threads {t} pulses ")), 20000.0);
-        let (seconds, cpu) = (
-            num(&format!("threads {t} seconds ")),
-            num(&format!("threads {t} cpu_s ")),
-        );
-        let write = num(&format!("threads {t} write_cpu_s "));
-        assert!(seconds > 0.0 && cpu > 0.0, "{text}");
-        assert!(write > 0.0 && write < cpu, "{text}");
-        // Timer and CPU clocks tick differently, and both are printed
-        // rounded to a millisecond: a little slack.
-        assert!(cpu <= t as f64 * seconds + 0.003, "{text}");
+        for key in [
+            "seconds",
+            "pulses_per_s",
+            "rays_per_s",
+            "points_per_s",
+            "cpu_s",
+            "cores_busy",
+            "write_cpu_s",
+        ] {
+            num(&format!("threads {t} {key} "));
+        }
     }
-    // At equal CPU per pulse, the speed-up is the ratio of the busy cores
-    // (both printed rounded to 0.01).
-    let busy = num("threads 2 cores_busy ") / num("threads 1 cores_busy ");
+    for key in [
+        "load_s ",
+        "scaling_1_to_2 ",
+        "scaling_1_to_2_at_equal_cpu ",
+        "scaling_1_to_2_median ",
+        "peak_rss_mb ",
+    ] {
+        num(key);
+    }
+    assert_eq!(num("scaling_pairs "), 2.0);
+    let hashes: Vec<&str> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("flat threads "))
+        .filter(|l| l.contains(" las_fnv1a "))
+        .filter_map(|l| l.rsplit(' ').next())
+        .collect();
+    assert_eq!(hashes.len(), 4, "{text}");
     assert!(
-        (num("scaling_1_to_2_at_equal_cpu ") - busy).abs() < 0.03,
-        "{text}"
-    );
-    assert_eq!(
-        value("threads 1 las_fnv1a"),
-        value("threads 2 las_fnv1a"),
-        "thread counts must write the same LAS"
+        hashes.iter().all(|h| *h == hashes[0]),
+        "thread counts must write the same LAS: {hashes:?}"
     );
     assert_eq!(value("identical_output "), "true");
-    // Two pairs of runs: the median of two speed-ups is their mean.
-    let rates = |t: u32| -> Vec<f64> {
-        let key = format!("flat threads {t} pulses_per_s ");
-        text.lines()
-            .filter_map(|l| l.strip_prefix(key.as_str()))
-            .map(|v| v.parse().unwrap())
-            .collect()
-    };
-    let (one, two) = (rates(1), rates(2));
-    assert_eq!((one.len(), two.len()), (2, 2), "{text}");
-    assert_eq!(num("scaling_pairs "), 2.0);
-    let mean = (two[0] / one[0] + two[1] / one[1]) / 2.0;
-    assert!(
-        (num("scaling_1_to_2_median ") - mean).abs() < 0.006,
-        "{text}"
-    );
     let _ = std::fs::remove_dir_all(&dir);
 }
