@@ -54,9 +54,14 @@ enum Command {
         /// cores).
         #[arg(long)]
         threads: Option<usize>,
-        /// Seed of all random streams (overrides the demo's).
-        #[arg(long)]
+        /// Seed of all random streams (overrides the demo's; 0 to
+        /// 9223372036854775807, the integers a TOML file can hold).
+        #[arg(long, value_parser = seed_parser())]
         seed: Option<u64>,
+        /// Write into a non-empty directory no run wrote, replacing only
+        /// the files a run writes there.
+        #[arg(long)]
+        overwrite: bool,
         /// Also write the demo's survey as a TOML file, to start your own.
         #[arg(long, value_name = "FILE")]
         export_survey: Option<PathBuf>,
@@ -74,9 +79,15 @@ enum Command {
         /// cores).
         #[arg(long)]
         threads: Option<usize>,
-        /// Seed of all random streams (overrides the file's).
-        #[arg(long, conflicts_with = "resume")]
+        /// Seed of all random streams (overrides the file's; 0 to
+        /// 9223372036854775807, the integers a TOML file can hold).
+        #[arg(long, conflicts_with = "resume", value_parser = seed_parser())]
         seed: Option<u64>,
+        /// Write into a non-empty directory no run wrote, replacing only
+        /// the files a run writes there (points.*, survey.toml,
+        /// trajectory*.csv, summary.json, report.html) and keeping the rest.
+        #[arg(long, conflicts_with = "resume")]
+        overwrite: bool,
         /// Continue the interrupted run in DIR (with its survey.toml) up to
         /// the files an uninterrupted run would have written.
         #[arg(long, value_name = "DIR", conflicts_with = "survey")]
@@ -143,6 +154,11 @@ enum Command {
     },
 }
 
+/// Seeds a survey file can hold: TOML integers are signed 64-bit.
+fn seed_parser() -> clap::builder::RangedU64ValueParser<u64> {
+    clap::value_parser!(u64).range(..=i64::MAX as u64)
+}
+
 /// Set by the first Ctrl-C (SIGINT) or SIGTERM: the run stops at the next
 /// block of pulses and finishes its files.
 static STOP: AtomicBool = AtomicBool::new(false);
@@ -175,6 +191,7 @@ fn main() -> ExitCode {
             threads,
             seed,
             export_survey,
+            overwrite,
         } => {
             let mut raw = lidarsim::demo::demo_survey();
             if seed.is_some() {
@@ -200,7 +217,7 @@ fn main() -> ExitCode {
                     return fail(1, &list.join("\n"));
                 }
             };
-            simulate(survey, &output, threads, false)
+            simulate(survey, &output, threads, false, overwrite)
         }
         Command::Run {
             survey,
@@ -208,6 +225,7 @@ fn main() -> ExitCode {
             threads,
             seed,
             resume,
+            overwrite,
         } => {
             let (path, output, resuming) = match (resume, survey) {
                 (Some(dir), _) => (dir.join("survey.toml"), dir, true),
@@ -225,7 +243,7 @@ fn main() -> ExitCode {
                 );
             }
             match Survey::load_with_seed(&path, seed) {
-                Ok(s) => simulate(s, &output, threads, resuming),
+                Ok(s) => simulate(s, &output, threads, resuming, overwrite),
                 Err(e) => fail_survey(&e),
             }
         }
@@ -427,8 +445,42 @@ fn warn(survey: &Survey) {
     }
 }
 
-fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool) -> ExitCode {
+/// Test hook: `LIDARSIM_TEST_HOLD_AT_PULSE=N` makes a run wait, once N
+/// pulses are written, until it is stopped (Ctrl-C or SIGTERM), after
+/// printing "holding after K pulses" to standard error: tests interrupt a
+/// run at a known point instead of after a guessed time.
+fn hold_at_pulse() -> Option<u64> {
+    std::env::var("LIDARSIM_TEST_HOLD_AT_PULSE")
+        .ok()?
+        .parse()
+        .ok()
+}
+
+/// Waits for the stop flag (see [`hold_at_pulse`]).
+fn hold_until_stopped(done: u64) {
+    static ANNOUNCED: AtomicBool = AtomicBool::new(false);
+    if !ANNOUNCED.swap(true, Ordering::SeqCst) {
+        note!("holding after {done} pulses");
+    }
+    while !STOP.load(Ordering::SeqCst) {
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+}
+
+fn simulate(
+    survey: Survey,
+    output: &Path,
+    threads: Option<usize>,
+    resume: bool,
+    overwrite: bool,
+) -> ExitCode {
     warn(&survey);
+    if survey.output.formats.laz && !resume {
+        note!(
+            "note: this run writes LAZ, which cannot be continued: if it is stopped, run the \
+             survey again"
+        );
+    }
     let threads = match threads {
         Some(0) => return fail(2, "--threads must be at least 1"),
         Some(n) => n,
@@ -446,7 +498,13 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
     } else {
         ProgressBar::hidden()
     };
-    let progress = |done: u64| bar.set_position(done);
+    let hold = hold_at_pulse();
+    let progress = |done: u64| {
+        bar.set_position(done);
+        if hold.is_some_and(|h| done >= h) {
+            hold_until_stopped(done);
+        }
+    };
     let name = source_name(&survey);
     // The survey is not needed afterwards: its scene moves into the BVH.
     let result = run_survey_to_dir(
@@ -457,6 +515,7 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
             progress: &progress,
             stop: Some(&STOP),
             resume,
+            overwrite,
             pulse_budget: None,
             on_warning: Some(&|w: &str| {
                 bar.suspend(|| note!("warning: {name}: {w}"));
@@ -468,14 +527,18 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
         Ok(summary) if !summary.complete => {
             let next = summary.next_pulse.unwrap_or_default();
             note!(
-                "interrupted after {} pulses: the files in {} hold them and are valid; \
+                "interrupted after {} pulses: the .partial files in {} hold them and are valid; \
                  summary.json says \"complete\": false, next pulse {} of line {}",
                 summary.pulses,
                 output.display(),
                 next.pulse,
-                next.line + 1
+                next.line
             );
-            note!("continue with: lidarsim run --resume {}", output.display());
+            if summary.resumable {
+                note!("continue with: lidarsim run --resume {}", output.display());
+            } else {
+                note!("this run wrote LAZ, which cannot be continued: run the survey again");
+            }
             ExitCode::from(INTERRUPTED)
         }
         Ok(summary) => {

@@ -18,7 +18,7 @@ use crate::survey::Survey;
 /// Expected figures of one flight line.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct LinePlan {
-    /// Line number (0-based).
+    /// Flight line number, 1 for the first (the LAS point source ID).
     pub line: u32,
     /// Pulses emitted.
     pub pulses: u64,
@@ -117,7 +117,7 @@ pub fn plan(survey: &Survey, caster: &dyn RayCaster) -> Plan {
         } * s.mirror.scan_half_angle_rad
             * s.mirror.scan_frequency_hz;
         lines.push(LinePlan {
-            line: line.index,
+            line: line.index + 1,
             pulses,
             duration_s: line.duration_s(),
             height_above_ground_m: h,
@@ -176,7 +176,7 @@ pub fn warnings(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> Vec<Str
     let mut missing = Vec::new();
     let mut swaths = Aabb::EMPTY;
     for (line, lp) in survey.lines.iter().zip(&plan.lines) {
-        let n = lp.line + 1;
+        let n = lp.line;
         let h = lp.height_above_ground_m;
         let edge = h / theta.cos();
         if h > 0.0 && h < s.min_range_m {

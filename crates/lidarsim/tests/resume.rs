@@ -150,7 +150,7 @@ fn assert_same_run(a: &Path, b: &Path) {
 /// counts and bounds agree with its points, which are those of the
 /// uninterrupted run's first pulses.
 fn check_prefix(part: &Path, full: &Path, summary: &Summary) {
-    let mut r = las::Reader::from_path(part.join("points.las")).unwrap();
+    let mut r = las::Reader::from_path(part.join("points.las.partial")).unwrap();
     let header = r.header().clone();
     let points: Vec<las::Point> = r
         .read_all()
@@ -191,7 +191,7 @@ fn check_prefix(part: &Path, full: &Path, summary: &Summary) {
         .unwrap();
     assert!(points == full_points);
     // The XYZ file: header line plus one line per point.
-    let xyz = std::fs::read_to_string(part.join("points.xyz")).unwrap();
+    let xyz = std::fs::read_to_string(part.join("points.xyz.partial")).unwrap();
     assert_eq!(xyz.lines().count() as u64, summary.points + 1);
 }
 
@@ -211,7 +211,7 @@ fn interrupted_then_resumed_equals_uninterrupted() {
     assert_eq!(next.pulse % lidarsim::sim::BLOCK_PULSES, 0);
     assert!(first.pulses < total);
     // Pulses before `next` were all simulated, none after.
-    let before: u64 = s.lines[..next.line]
+    let before: u64 = s.lines[..next.line as usize - 1]
         .iter()
         .map(|l| s.pulses_of(l))
         .sum::<u64>()
@@ -247,7 +247,7 @@ fn interrupted_then_resumed_equals_uninterrupted() {
 
 /// Sessions with a budget of 5 blocks (10 240 pulses; lines of 24 000),
 /// alternately on 1 and 2 threads: they stop at pulses 10 240 and 20 480 of
-/// line 0; the third finishes line 0 (3 520 pulses) and goes on into line 1
+/// line 1; the third finishes line 1 (3 520 pulses) and goes on into line 2
 /// up to the next block boundary past its budget (8 192); the fourth stops
 /// at 18 432, the fifth completes — deterministic, unlike a stop flag
 /// raised from another thread.
@@ -279,7 +279,7 @@ fn many_interruptions_across_lines_still_equal_one_run() {
         assert!(stops.len() < 20);
     }
     println!("stops (line, pulse): {stops:?}");
-    assert_eq!(stops, [(0, 10_240), (0, 20_480), (1, 8_192), (1, 18_432)]);
+    assert_eq!(stops, [(1, 10_240), (1, 20_480), (2, 8_192), (2, 18_432)]);
     assert_same_run(&full, &part);
     std::fs::remove_dir_all(&full).ok();
     std::fs::remove_dir_all(&part).ok();
@@ -292,7 +292,7 @@ fn resume_refuses_changed_files() {
     let first = session(&s, &part, false, 1, 1);
     assert!(!first.complete);
     // Cut short behind the run's back: fewer bytes than recorded.
-    let las = part.join("points.las");
+    let las = part.join("points.las.partial");
     let mut bytes = std::fs::read(&las).unwrap();
     bytes.truncate(bytes.len() - 30);
     std::fs::write(&las, &bytes).unwrap();
@@ -301,7 +301,7 @@ fn resume_refuses_changed_files() {
     let e = run_to_dir(&s, &part, &o).unwrap_err();
     let msg = e.to_string();
     assert!(
-        msg.contains("points.las") && msg.contains("fewer than"),
+        msg.contains("points.las") && msg.contains("shorter than"),
         "{msg}"
     );
     // The file is left as it was.
@@ -382,4 +382,123 @@ fn one_thread_simulates_and_writes_in_turn_on_the_calling_thread() {
             "{threads} threads"
         );
     }
+}
+
+/// Runs `text` to `full`, and in `part` stops it after one block and
+/// resumes it: the two directories' `files` must be equal byte for byte.
+fn interrupt_and_resume_equal(text: &str, name: &str, files: &[&str]) {
+    let s = Survey::from_toml(text, None).unwrap();
+    let full = dir(&format!("{name}-full"));
+    run_to_dir(&s, &full, &RunOptions::new(2, &|_| {})).unwrap();
+    let part = dir(name);
+    let first = session(&s, &part, false, 1, 1);
+    assert!(!first.complete && first.resumable);
+    for f in files {
+        assert!(part.join(format!("{f}.partial")).exists(), "{f}.partial");
+        assert!(!part.join(f).exists(), "{f} under its final name");
+    }
+    let mut o = RunOptions::new(2, &|_| {});
+    o.resume = true;
+    let s2 = Survey::load(&part.join("survey.toml")).unwrap();
+    assert!(run_to_dir(&s2, &part, &o).unwrap().complete);
+    for f in files {
+        let (x, y) = (
+            std::fs::read(full.join(f)).unwrap(),
+            std::fs::read(part.join(f)).unwrap(),
+        );
+        assert!(x == y, "{f} differs ({} vs {} bytes)", x.len(), y.len());
+    }
+    std::fs::remove_dir_all(&full).ok();
+    std::fs::remove_dir_all(&part).ok();
+}
+
+#[test]
+fn full_waveform_and_ply_runs_resume_to_the_same_bytes() {
+    let text = SURVEY.replace(
+        r#"formats = ["las", "xyz"]"#,
+        r#"formats = ["las-waveform", "ply", "xyz"]"#,
+    );
+    interrupt_and_resume_equal(
+        &text,
+        "wdp",
+        &["points.las", "points.wdp", "points.ply", "points.xyz"],
+    );
+}
+
+/// A LAZ run cannot be continued: it says so in its summary, and a resume
+/// is refused with the reason instead of being offered.
+#[test]
+fn an_interrupted_laz_run_is_not_resumable() {
+    let text = SURVEY.replace(r#"formats = ["las", "xyz"]"#, r#"formats = ["laz"]"#);
+    let s = Survey::from_toml(&text, None).unwrap();
+    let part = dir("laz");
+    let first = session(&s, &part, false, 1, 1);
+    assert!(!first.complete && !first.resumable);
+    assert!(part.join("points.laz.partial").exists());
+    let mut o = RunOptions::new(1, &|_| {});
+    o.resume = true;
+    let e = run_to_dir(&s, &part, &o).unwrap_err();
+    assert!(e.to_string().contains("LAZ"), "{e}");
+    std::fs::remove_dir_all(&part).ok();
+}
+
+/// `--resume` trusts nothing in `summary.json` that the files do not
+/// confirm: a next pulse moved forward or back (alone, or with the pulse
+/// count edited to match), an edited survey.toml or a point file changed
+/// at its end are refused, and once everything is put back the resume
+/// gives the uninterrupted run.
+#[test]
+fn resume_refuses_an_edited_summary_survey_or_file() {
+    let s = survey();
+    let full = dir("edited-full");
+    run_to_dir(&s, &full, &RunOptions::new(1, &|_| {})).unwrap();
+    let part = dir("edited");
+    let first = session(&s, &part, false, 2, 1);
+    assert!(!first.complete);
+    let summary_path = part.join("summary.json");
+    let original = std::fs::read(&summary_path).unwrap();
+    let resume = |s: &Survey| {
+        let mut o = RunOptions::new(1, &|_| {});
+        o.resume = true;
+        run_to_dir(s, &part, &o)
+    };
+    let edit = |f: &dyn Fn(&mut serde_json::Value)| {
+        let mut v: serde_json::Value = serde_json::from_slice(&original).unwrap();
+        f(&mut v);
+        std::fs::write(&summary_path, serde_json::to_vec_pretty(&v).unwrap()).unwrap();
+    };
+    let pulses = first.pulses;
+    for (what, delta) in [("forward", 2048i64), ("back", -2048)] {
+        let moved = (pulses as i64 + delta) as u64;
+        edit(&|v| v["next_pulse"]["pulse"] = moved.into());
+        let e = resume(&s).unwrap_err().to_string();
+        assert!(e.contains("does not follow"), "{what}: {e}");
+        edit(&|v| {
+            v["next_pulse"]["pulse"] = moved.into();
+            v["pulses"] = moved.into();
+        });
+        let e = resume(&s).unwrap_err().to_string();
+        assert!(e.contains("summary.json was edited"), "{what}: {e}");
+    }
+    std::fs::write(&summary_path, &original).unwrap();
+    let toml_path = part.join("survey.toml");
+    let toml = std::fs::read(&toml_path).unwrap();
+    std::fs::write(&toml_path, [&toml[..], b"\n# edited\n"].concat()).unwrap();
+    let e = resume(&s).unwrap_err().to_string();
+    assert!(e.contains("survey.toml") && e.contains("changed"), "{e}");
+    std::fs::write(&toml_path, &toml).unwrap();
+    // The last point record's bytes changed in place (same length).
+    let las = part.join("points.las.partial");
+    let bytes = std::fs::read(&las).unwrap();
+    let mut changed = bytes.clone();
+    let n = changed.len();
+    changed[n - 5] ^= 0xff;
+    std::fs::write(&las, &changed).unwrap();
+    let e = resume(&s).unwrap_err().to_string();
+    assert!(e.contains("different"), "{e}");
+    std::fs::write(&las, &bytes).unwrap();
+    assert!(resume(&s).unwrap().complete);
+    assert_same_run(&full, &part);
+    std::fs::remove_dir_all(&full).ok();
+    std::fs::remove_dir_all(&part).ok();
 }

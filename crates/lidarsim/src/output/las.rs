@@ -297,8 +297,14 @@ impl LasWriter {
     /// interrupted: the point counts, counts by return, bounds and creation
     /// date are taken from its header, which must match `settings`
     /// (scale, offset, record layout), and points are appended after the
-    /// `len` bytes the file had then.
-    pub fn resume(path: &Path, mut settings: LasSettings, len: u64) -> io::Result<Self> {
+    /// `len` bytes the file had then. With waveforms, the `.wdp` file
+    /// beside it is continued after its `wdp_len` bytes.
+    pub fn resume(
+        path: &Path,
+        mut settings: LasSettings,
+        len: u64,
+        wdp_len: Option<u64>,
+    ) -> io::Result<Self> {
         let bad = |what: String| {
             file_error(
                 path,
@@ -312,14 +318,9 @@ impl LasWriter {
         // The file as the interrupted run finished it, or as a failed
         // resume left it.
         let partial = AtomicFile::partial_of(path);
-        let current = if path.exists() || !partial.exists() {
-            path
-        } else {
-            &partial
-        };
-        std::fs::File::open(current)
+        std::fs::File::open(&partial)
             .and_then(|mut f| io::Read::read_exact(&mut f, &mut h))
-            .map_err(|e| file_error(path, e))?;
+            .map_err(|e| file_error(&partial, e))?;
         let u16_at = |o: usize| u16::from_le_bytes([h[o], h[o + 1]]);
         let u32_at = |o: usize| u32::from_le_bytes([h[o], h[o + 1], h[o + 2], h[o + 3]]);
         let u64_at = |o: usize| {
@@ -328,13 +329,14 @@ impl LasWriter {
             u64::from_le_bytes(b)
         };
         let f64_at = |o: usize| f64::from_bits(u64_at(o));
-        if settings.compressed || settings.waveform.is_some() {
+        if settings.compressed {
             return Err(bad(
-                "LAZ and full-waveform files cannot be continued; run the survey again".into(),
+                "LAZ files cannot be continued; run the survey again".into()
             ));
         }
-        if &h[0..4] != b"LASF" || h[24..26] != [1, 4] || h[104] != 6 {
-            return Err(bad("not a LAS 1.4 file of point format 6".into()));
+        let format = if settings.waveform.is_some() { 9 } else { 6 };
+        if &h[0..4] != b"LASF" || h[24..26] != [1, 4] || h[104] != format {
+            return Err(bad(format!("not a LAS 1.4 file of point format {format}")));
         }
         settings.creation_day_year = (u16_at(90), u16_at(92));
         let mut w = Self {
@@ -380,9 +382,62 @@ impl LasWriter {
                 w.min[a] = w.quantize(min, a).map_err(|e| bad(e.to_string()))?;
             }
         }
-        // Only now, with everything checked, is the file touched.
+        // Only now, with everything checked, are the files touched.
+        if let Some(digitizer) = w.settings.waveform {
+            let wdp_path = path.with_extension("wdp");
+            let wdp_len = wdp_len
+                .filter(|&n| n >= WDP_HEADER_LEN)
+                .ok_or_else(|| bad("the length of its waveform file was not recorded".into()))?;
+            w.wdp = Some(WdpFile {
+                file: Some(AtomicFile::reopen(&wdp_path, wdp_len)?),
+                path: wdp_path,
+                next_offset: wdp_len,
+                digitizer,
+                buf: Vec::new(),
+            });
+        }
         w.file = AtomicFile::reopen(path, len)?;
         Ok(w)
+    }
+
+    /// Writes what is buffered, ends the compressed stream and writes the
+    /// final headers of the LAS file and of its own waveform file; returns
+    /// both files, to be committed or suspended.
+    #[allow(clippy::type_complexity)]
+    fn complete(mut self) -> io::Result<(AtomicFile, Option<(AtomicFile, PathBuf)>)> {
+        if !self.buf.is_empty() {
+            let rest = std::mem::take(&mut self.buf);
+            self.file
+                .write_unbuffered(&rest)
+                .map_err(|e| self.file.error(e))?;
+        }
+        if let Body::Laz(mut c) = std::mem::replace(&mut self.body, Body::Plain) {
+            c.done().map_err(|e| self.file.error(e))?;
+            self.file.put_writer(c.into_inner());
+        }
+        let header = self.header();
+        let w = self.file.writer();
+        let r = w
+            .flush()
+            .and_then(|()| w.seek(SeekFrom::Start(0)))
+            .and_then(|_| w.write_all(&header))
+            .and_then(|()| w.seek(SeekFrom::End(0)).map(|_| ()));
+        if let Err(e) = r {
+            return Err(self.file.error(e));
+        }
+        let mut wdp_file = None;
+        if let Some(wdp) = self.wdp.take()
+            && let Some(mut file) = wdp.file
+        {
+            let len = wdp.next_offset - WDP_HEADER_LEN;
+            let w = file.writer();
+            w.flush()?;
+            w.seek(SeekFrom::Start(0))?;
+            w.write_all(&wdp_header(len))?;
+            w.seek(SeekFrom::End(0))?;
+            wdp_file = Some((file, wdp.path));
+        }
+        Ok((self.file, wdp_file))
     }
 
     fn quantize(&self, v: f64, axis: usize) -> io::Result<i32> {
@@ -841,38 +896,21 @@ impl PointSink for LasWriter {
         self.encode(points, waveforms)
     }
 
-    fn finish(mut self: Box<Self>) -> io::Result<()> {
-        if !self.buf.is_empty() {
-            let rest = std::mem::take(&mut self.buf);
-            self.file
-                .write_unbuffered(&rest)
-                .map_err(|e| self.file.error(e))?;
+    fn finish(self: Box<Self>) -> io::Result<()> {
+        let (file, wdp) = self.complete()?;
+        if let Some((wdp, path)) = wdp {
+            wdp.commit()
+                .map_err(|e| io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
         }
-        if let Body::Laz(mut c) = std::mem::replace(&mut self.body, Body::Plain) {
-            c.done().map_err(|e| self.file.error(e))?;
-            self.file.put_writer(c.into_inner());
+        file.commit()
+    }
+
+    fn suspend(self: Box<Self>) -> io::Result<()> {
+        let (file, wdp) = self.complete()?;
+        if let Some((wdp, _)) = wdp {
+            wdp.suspend()?;
         }
-        let header = self.header();
-        let w = self.file.writer();
-        let r = w
-            .flush()
-            .and_then(|()| w.seek(SeekFrom::Start(0)))
-            .and_then(|_| w.write_all(&header));
-        if let Err(e) = r {
-            return Err(self.file.error(e));
-        }
-        if let Some(wdp) = self.wdp.take()
-            && let Some(mut file) = wdp.file
-        {
-            let len = wdp.next_offset - WDP_HEADER_LEN;
-            let w = file.writer();
-            w.flush()?;
-            w.seek(SeekFrom::Start(0))?;
-            w.write_all(&wdp_header(len))?;
-            file.commit()
-                .map_err(|e| io::Error::new(e.kind(), format!("{}: {e}", wdp.path.display())))?;
-        }
-        self.file.commit()
+        file.suspend()
     }
 
     fn discard(self: Box<Self>) {}

@@ -132,6 +132,12 @@ pub trait PointSink: Send {
     }
     /// Completes the output (headers, renaming).
     fn finish(self: Box<Self>) -> io::Result<()>;
+    /// Completes the output for the points written so far but leaves it
+    /// under its temporary name: the files of an interrupted run, which a
+    /// resumed run continues. Sinks without files finish.
+    fn suspend(self: Box<Self>) -> io::Result<()> {
+        self.finish()
+    }
     /// Abandons the output, removing anything partial.
     fn discard(self: Box<Self>);
 }
@@ -234,6 +240,14 @@ impl Write for OutFile {
     }
 }
 
+impl OutFile {
+    /// The file, for reading back what was written (the position moves:
+    /// seek back before writing again).
+    pub fn file_mut(&mut self) -> &mut File {
+        &mut self.file
+    }
+}
+
 impl Seek for OutFile {
     fn seek(&mut self, to: SeekFrom) -> io::Result<u64> {
         self.pos = self.file.seek(to)?;
@@ -258,21 +272,23 @@ pub struct AtomicFile {
 impl AtomicFile {
     /// Creates `target.partial` for writing (any stale final file with the
     /// same name is removed first so it cannot be mistaken for this run's).
+    /// The partial file is created anew and exclusively: a file or a
+    /// symbolic link already under that name is removed (the link, never
+    /// what it points to), so that nothing outside the output is written.
     pub fn create(target: &Path) -> io::Result<Self> {
-        let mut partial = target.as_os_str().to_owned();
-        partial.push(".partial");
-        let partial = PathBuf::from(partial);
-        match std::fs::remove_file(target) {
-            Ok(()) => {}
-            Err(e) if e.kind() == io::ErrorKind::NotFound => {}
-            Err(e) => return Err(e),
-        }
-        let file = File::create(&partial).map_err(|e| {
-            io::Error::new(
-                e.kind(),
-                format!("cannot create '{}': {e}", partial.display()),
-            )
-        })?;
+        let partial = Self::partial_of(target);
+        remove_if_present(target)?;
+        remove_if_present(&partial)?;
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&partial)
+            .map_err(|e| {
+                io::Error::new(
+                    e.kind(),
+                    format!("cannot create '{}': {e}", partial.display()),
+                )
+            })?;
         Ok(Self {
             writer: Some(BufWriter::with_capacity(1 << 20, OutFile::new(file, 0))),
             partial,
@@ -282,20 +298,22 @@ impl AtomicFile {
         })
     }
 
-    /// Continues a file that an interrupted run finished early: `target`
-    /// is renamed back to `target.partial` (or `target.partial` is taken as
-    /// it is, left by a resumed run that failed), cut to `len` bytes and
-    /// opened for writing at its end. Dropped uncommitted, the partial file
-    /// is kept, so that the run can be resumed again.
+    /// Continues a file that an interrupted run finished early and left
+    /// as `target.partial` ([`AtomicFile::suspend`]): cut to `len` bytes
+    /// and opened for writing at its end. The file must be a regular file
+    /// (a symbolic link is refused, not followed). Dropped uncommitted, the
+    /// partial file is kept, so that the run can be resumed again.
     pub fn reopen(target: &Path, len: u64) -> io::Result<Self> {
         let partial = Self::partial_of(target);
-        let named = |e: io::Error| file_error(target, e);
-        let current = if !partial.exists() || target.exists() {
-            target
-        } else {
-            &partial
-        };
-        let have = std::fs::metadata(current).map_err(named)?.len();
+        let named = |e: io::Error| file_error(&partial, e);
+        let meta = std::fs::symlink_metadata(&partial).map_err(named)?;
+        if !meta.file_type().is_file() {
+            return Err(named(io::Error::new(
+                io::ErrorKind::InvalidData,
+                "not a regular file: an interrupted run leaves its files as regular files",
+            )));
+        }
+        let have = meta.len();
         if have < len {
             return Err(named(io::Error::new(
                 io::ErrorKind::InvalidData,
@@ -305,14 +323,7 @@ impl AtomicFile {
                 ),
             )));
         }
-        if current == target {
-            std::fs::rename(target, &partial).map_err(named)?;
-        }
-        let mut file = std::fs::OpenOptions::new()
-            .read(true)
-            .write(true)
-            .open(&partial)
-            .map_err(named)?;
+        let mut file = open_no_follow(&partial).map_err(named)?;
         file.set_len(len).map_err(named)?;
         let end = file.seek(SeekFrom::End(0)).map_err(named)?;
         Ok(Self {
@@ -380,6 +391,22 @@ impl AtomicFile {
         self.writer = Some(writer);
     }
 
+    /// Flushes and syncs the file but keeps it as `target.partial`: the
+    /// output of an interrupted run, complete for what it holds, which a
+    /// resumed run continues ([`AtomicFile::reopen`]) and only a complete
+    /// run renames. Errors name the file.
+    pub fn suspend(mut self) -> io::Result<()> {
+        let partial = self.partial.clone();
+        let w = self.writer.take().expect("writer present until commit");
+        let file = w
+            .into_inner()
+            .map_err(|e| file_error(&partial, e.into_error()))?
+            .file;
+        file.sync_all().map_err(|e| file_error(&partial, e))?;
+        self.committed = true;
+        Ok(())
+    }
+
     /// Flushes, syncs and renames to the final name. Errors name the file.
     pub fn commit(mut self) -> io::Result<()> {
         let target = self.target.clone();
@@ -442,6 +469,28 @@ impl Drop for AtomicFile {
             let _ = std::fs::remove_file(&self.partial);
         }
     }
+}
+
+/// Removes the file or symbolic link `path` (never what a link points
+/// to); a missing one is fine.
+fn remove_if_present(path: &Path) -> io::Result<()> {
+    match std::fs::remove_file(path) {
+        Err(e) if e.kind() != io::ErrorKind::NotFound => Err(file_error(path, e)),
+        _ => Ok(()),
+    }
+}
+
+/// Opens `path` for reading and writing without following a symbolic link
+/// in its last component.
+fn open_no_follow(path: &Path) -> io::Result<File> {
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true).write(true);
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        options.custom_flags(libc::O_NOFOLLOW);
+    }
+    options.open(path)
 }
 
 /// Writes a whole small file atomically.

@@ -63,6 +63,61 @@ impl PlyWriter {
     }
 }
 
+impl PlyWriter {
+    /// Continues `path`, which an interrupted run finished early when it
+    /// held `len` bytes: its header must be this writer's header for the
+    /// vertices those bytes hold, and vertices are appended after them.
+    pub fn resume(path: &Path, len: u64, origin_m: [f64; 3]) -> io::Result<Self> {
+        let bad = |what: String| {
+            super::file_error(
+                path,
+                io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    format!("cannot continue this file: {what}"),
+                ),
+            )
+        };
+        let header_len = header(0).len() as u64;
+        let record = PLY_RECORD_LEN as u64;
+        if len < header_len || !(len - header_len).is_multiple_of(record) {
+            return Err(bad(format!(
+                "{len} bytes are not a header and whole {record}-byte vertices"
+            )));
+        }
+        let count = (len - header_len) / record;
+        let mut file = AtomicFile::reopen(path, len)?;
+        let mut head = vec![0u8; header_len as usize];
+        {
+            let w = file.writer().get_mut();
+            w.seek(SeekFrom::Start(0))?;
+            io::Read::read_exact(w.file_mut(), &mut head)?;
+            w.seek(SeekFrom::End(0))?;
+        }
+        if head != header(count) {
+            return Err(bad(format!(
+                "its header does not describe {count} vertices of this writer"
+            )));
+        }
+        Ok(Self {
+            file,
+            origin_m,
+            count,
+            buf: Vec::with_capacity(1 << 16),
+        })
+    }
+
+    /// Writes the header for the vertices written so far.
+    fn write_header(&mut self) -> io::Result<()> {
+        let h = header(self.count);
+        let w = self.file.writer();
+        w.flush()?;
+        w.seek(SeekFrom::Start(0))?;
+        w.write_all(&h)?;
+        w.seek(SeekFrom::End(0))?;
+        Ok(())
+    }
+}
+
 /// The header for `count` vertices; always the same length.
 fn header(count: u64) -> Vec<u8> {
     let digits = count.to_string();
@@ -117,12 +172,13 @@ impl PointSink for PlyWriter {
     }
 
     fn finish(mut self: Box<Self>) -> io::Result<()> {
-        let h = header(self.count);
-        let w = self.file.writer();
-        w.flush()?;
-        w.seek(SeekFrom::Start(0))?;
-        w.write_all(&h)?;
+        self.write_header()?;
         self.file.commit()
+    }
+
+    fn suspend(mut self: Box<Self>) -> io::Result<()> {
+        self.write_header()?;
+        self.file.suspend()
     }
 
     fn discard(self: Box<Self>) {}

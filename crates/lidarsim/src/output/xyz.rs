@@ -86,6 +86,10 @@ impl PointSink for XyzWriter {
         self.file.commit()
     }
 
+    fn suspend(self: Box<Self>) -> io::Result<()> {
+        self.file.suspend()
+    }
+
     fn discard(self: Box<Self>) {}
 }
 

@@ -1,11 +1,21 @@
-//! A whole run into an output directory: points, trajectory and summary.
+//! A whole run into an output directory: points, trajectory, report and
+//! summary.
+//!
+//! [`run_to_dir`] prepares the directory ([`outdir`]), simulates the survey
+//! into its point files and writes `summary.json` ([`summary`]); a run
+//! stopped early leaves its point files finished but under their
+//! `.partial` names with a record a resumed run checks ([`resume`]).
 
-use std::collections::BTreeMap;
+pub mod outdir;
+pub mod resume;
+pub mod summary;
+
+pub use resume::NextPulse;
+pub use summary::Summary;
+
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
-
-use serde::{Deserialize, Serialize};
 
 use crate::accel::{Bvh, RayCaster};
 use crate::navigation::observed_pose;
@@ -17,10 +27,11 @@ use crate::report::ReportSink;
 use crate::scene::Scene;
 use crate::sim::{PulsePosition, RunControl, RunCounts, Simulator, Timer};
 use crate::survey::Survey;
+use summary::Measured;
 
 /// A failure while writing the results.
 #[derive(Debug, thiserror::Error)]
-#[error("{path}: {source}")]
+#[error("{}: {source}", path.display())]
 pub struct RunError {
     /// The file or directory concerned.
     pub path: PathBuf,
@@ -37,13 +48,17 @@ pub struct RunOptions<'a> {
     /// interrupted run included when resuming).
     pub progress: &'a (dyn Fn(u64) + Sync),
     /// When set (by a Ctrl-C handler, say), the run stops at the next block
-    /// of pulses, finishes every file for what was simulated and writes a
-    /// `summary.json` with `"complete": false` and the next pulse.
+    /// of pulses, finishes every point file for what was simulated (under
+    /// its `.partial` name) and writes a `summary.json` with
+    /// `"complete": false` and the next pulse.
     pub stop: Option<&'a AtomicBool>,
     /// Continue the interrupted run in the output directory instead of
     /// starting afresh (the survey must be the one it ran: its
     /// `survey.toml`).
     pub resume: bool,
+    /// Write into a non-empty directory that no run wrote, replacing only
+    /// the files a run writes ([`outdir::prepare_fresh`]).
+    pub overwrite: bool,
     /// Stop (as if interrupted) once this many pulses were simulated in
     /// this call, rounded up to a whole block of 2048: long runs in slices.
     pub pulse_budget: Option<u64>,
@@ -60,89 +75,11 @@ impl<'a> RunOptions<'a> {
             progress,
             stop: None,
             resume: false,
+            overwrite: false,
             pulse_budget: None,
             on_warning: None,
         }
     }
-}
-
-/// Contents of `summary.json`.
-#[derive(Clone, Debug, Serialize)]
-pub struct Summary {
-    /// Version of the simulator.
-    pub lidarsim_version: &'static str,
-    /// True when every pulse was simulated and every file written; false
-    /// for a run that was interrupted (see `next_pulse`).
-    pub complete: bool,
-    /// Of an interrupted run: the first pulse not simulated, where
-    /// `lidarsim run --resume` continues.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub next_pulse: Option<PulsePosition>,
-    /// Of an interrupted run: the length in bytes of each point file, which
-    /// a resumed run checks and appends to.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub point_file_bytes: Option<BTreeMap<String, u64>>,
-    /// Seed of the random streams.
-    pub seed: u64,
-    /// Threads the run used (the one that wrote the output among them).
-    pub threads: usize,
-    /// Pulses emitted.
-    pub pulses: u64,
-    /// Points written.
-    pub points: u64,
-    /// Pulses with at least one echo.
-    pub pulses_with_echo: u64,
-    /// Points by return number (first, second, …).
-    pub points_by_return: Vec<u64>,
-    /// Sub-rays per pulse.
-    pub subrays_per_pulse: usize,
-    /// Laser wavelength, nm (for the record: reflectances are given at it).
-    pub wavelength_nm: f64,
-    /// Wall-clock time of the simulation (scene indexing excluded), s;
-    /// summed over the sessions of a resumed run.
-    pub wall_time_s: f64,
-    /// Time to build the acceleration structure, s.
-    pub index_time_s: f64,
-    /// Simulated pulses per wall-clock second.
-    pub pulses_per_second: f64,
-    /// Expected swath width (pulse-weighted mean over lines), m.
-    pub swath_width_m: f64,
-    /// Expected point density of one line, per m².
-    pub point_density_per_m2: f64,
-    /// Expected nadir footprint diameter, m.
-    pub footprint_diameter_m: f64,
-    /// What the GPS time of the points means.
-    pub gps_time: &'static str,
-    /// LAS intensity per unit of echo energy amplitude.
-    pub intensity_gain: f64,
-    /// Reference range of Eq. 2, m.
-    pub reference_range_m: f64,
-    /// Primitives in the scene.
-    pub scene_primitives: usize,
-    /// Files written, relative to the output directory.
-    pub files: Vec<String>,
-    /// Warnings about the survey (see `lidarsim check`).
-    pub warnings: Vec<String>,
-    /// Trees placed by each `[[forest]]` entry.
-    pub forest_trees: Vec<usize>,
-    /// The expected figures per flight line.
-    pub plan: Plan,
-}
-
-/// What a resumed run reads back from the `summary.json` of the
-/// interrupted one.
-#[derive(Debug, Deserialize)]
-struct Interrupted {
-    complete: bool,
-    seed: u64,
-    next_pulse: Option<PulsePosition>,
-    #[serde(default)]
-    point_file_bytes: BTreeMap<String, u64>,
-    pulses: u64,
-    points: u64,
-    pulses_with_echo: u64,
-    points_by_return: Vec<u64>,
-    wall_time_s: f64,
 }
 
 /// Name of the saved report state of an interrupted run.
@@ -170,60 +107,49 @@ fn run_error(dir: &Path, e: io::Error) -> RunError {
     }
 }
 
-/// Reads the `summary.json` of an interrupted run in `out_dir`.
-fn read_interrupted(survey: &Survey, out_dir: &Path) -> Result<Interrupted, RunError> {
-    let path = out_dir.join("summary.json");
-    let bad = |msg: String| RunError {
-        path: path.clone(),
-        source: io::Error::new(io::ErrorKind::InvalidData, msg),
-    };
-    let text = std::fs::read(&path).map_err(|e| RunError {
-        path: path.clone(),
-        source: io::Error::new(
-            e.kind(),
-            format!("{e}: no interrupted run to resume in this directory"),
-        ),
-    })?;
-    let prev: Interrupted = serde_json::from_slice(&text)
-        .map_err(|e| bad(format!("not a summary of lidarsim: {e}")))?;
-    if prev.complete {
-        return Err(bad("the run is complete: there is nothing to resume".into()));
-    }
-    if prev.seed != survey.seed {
-        return Err(bad(format!(
-            "the run used seed {} but the survey has seed {}: resume with the run's own survey.toml",
-            prev.seed, survey.seed
-        )));
-    }
-    if prev.next_pulse.is_none() {
-        return Err(bad("no next_pulse recorded".into()));
-    }
-    Ok(prev)
+/// The point files a survey writes, by final name (`points.wdp` with
+/// full waveforms).
+fn point_files(survey: &Survey) -> Vec<&'static str> {
+    let f = &survey.output.formats;
+    [
+        ("points.las", f.las),
+        ("points.wdp", f.las_waveform),
+        ("points.laz", f.laz),
+        ("points.ply", f.ply),
+        ("points.xyz", f.xyz),
+    ]
+    .into_iter()
+    .filter_map(|(n, on)| on.then_some(n))
+    .collect()
 }
 
-/// The length `name` had when the run in `prev` was interrupted.
-fn recorded_len(prev: &Interrupted, name: &str, summary_path: &Path) -> Result<u64, RunError> {
-    prev.point_file_bytes
-        .get(name)
-        .copied()
-        .ok_or_else(|| RunError {
-            path: summary_path.to_path_buf(),
-            source: io::Error::new(
-                io::ErrorKind::InvalidData,
-                format!("the interrupted run recorded no length of {name}"),
-            ),
-        })
+/// The files `survey` reads: the survey file, meshes, rasters, point
+/// clouds and the trajectory file.
+fn input_files(survey: &Survey) -> Vec<PathBuf> {
+    let raw = replayable(survey);
+    let mut inputs: Vec<PathBuf> = survey.source.iter().cloned().collect();
+    let files = raw
+        .meshes
+        .iter()
+        .map(|m| &m.file)
+        .chain(raw.terrains.iter().map(|t| &t.file))
+        .chain(raw.point_clouds.iter().map(|c| &c.file))
+        .chain(std::iter::once(&raw.platform.trajectory_file));
+    inputs.extend(files.flatten().map(PathBuf::from));
+    inputs
 }
 
 /// Simulates `survey` and writes the point files of `[output] formats`
 /// (`points.las` with `points.wdp` for full waveforms, `points.laz`,
 /// `points.ply`, `points.xyz`), the trajectories, `report.html` and
-/// `summary.json` into `out_dir` (created if needed). Files appear under their final names only when complete — or, when
-/// `options.stop` interrupts the run, finished for the pulses simulated so
-/// far, with `summary.json` saying `"complete": false` and where to go on;
-/// with `options.resume` such a run is continued, and its files end up
-/// byte for byte those of an uninterrupted run (apart from the timings).
-/// The scene is copied for the ray caster; [`run_survey_to_dir`] moves it.
+/// `summary.json` into `out_dir` (see [`outdir`] for which directories it
+/// accepts). Files appear under their final names only when complete. When
+/// `options.stop` interrupts the run, the point files are finished for the
+/// pulses simulated so far but keep their `.partial` names, and
+/// `summary.json` says `"complete": false` and where to go on; with
+/// `options.resume` such a run is continued, and its files end up byte for
+/// byte those of an uninterrupted run (apart from the timings). The scene
+/// is copied for the ray caster; [`run_survey_to_dir`] moves it.
 pub fn run_to_dir(
     survey: &Survey,
     out_dir: &Path,
@@ -244,6 +170,88 @@ pub fn run_survey_to_dir(
     run_with_scene(&survey, scene, out_dir, options)
 }
 
+/// Opens the sinks of the point files `names`: created afresh, or
+/// continued from the lengths an interrupted run recorded.
+fn open_sinks(
+    survey: &Survey,
+    caster: &dyn RayCaster,
+    out_dir: &Path,
+    prev: Option<&resume::Interrupted>,
+) -> Result<Vec<Box<dyn PointSink>>, RunError> {
+    let formats = &survey.output.formats;
+    let origin = survey.output.offset_m.to_array();
+    let created = |path: &Path| {
+        let path = path.to_path_buf();
+        move |source| RunError { path, source }
+    };
+    let len = |name: &str| -> Result<u64, RunError> {
+        prev.and_then(|p| p.file_len(name)).ok_or_else(|| RunError {
+            path: out_dir.join("summary.json"),
+            source: io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!("the interrupted run recorded no length of {name}"),
+            ),
+        })
+    };
+    let continued = |e| run_error(out_dir, e);
+    let mut sinks: Vec<Box<dyn PointSink>> = Vec::new();
+    if formats.las {
+        let path = out_dir.join("points.las");
+        let mut settings = las_settings(survey, caster);
+        if formats.las_waveform {
+            settings.waveform = Some(digitizer(survey, caster));
+        }
+        sinks.push(match prev {
+            None => Box::new(LasWriter::create(&path, settings).map_err(created(&path))?),
+            Some(_) => {
+                let wdp = if formats.las_waveform {
+                    Some(len("points.wdp")?)
+                } else {
+                    None
+                };
+                Box::new(
+                    LasWriter::resume(&path, settings, len("points.las")?, wdp)
+                        .map_err(continued)?,
+                )
+            }
+        });
+    }
+    if formats.laz {
+        let path = out_dir.join("points.laz");
+        // With "las-waveform" too, the LAZ points are format 9 and refer to
+        // the points.wdp the LAS writer writes (same base name, same
+        // packets).
+        let settings = LasSettings {
+            compressed: true,
+            waveform: formats.las_waveform.then(|| digitizer(survey, caster)),
+            waveform_file_shared: true,
+            ..las_settings(survey, caster)
+        };
+        sinks.push(Box::new(
+            LasWriter::create(&path, settings).map_err(created(&path))?,
+        ));
+    }
+    if formats.ply {
+        let path = out_dir.join("points.ply");
+        sinks.push(match prev {
+            None => Box::new(PlyWriter::create(&path, origin).map_err(created(&path))?),
+            Some(_) => {
+                Box::new(PlyWriter::resume(&path, len("points.ply")?, origin).map_err(continued)?)
+            }
+        });
+    }
+    if formats.xyz {
+        let path = out_dir.join("points.xyz");
+        sinks.push(match prev {
+            None => Box::new(XyzWriter::create(&path, origin).map_err(created(&path))?),
+            Some(_) => {
+                Box::new(XyzWriter::resume(&path, len("points.xyz")?, origin).map_err(continued)?)
+            }
+        });
+    }
+    Ok(sinks)
+}
+
 /// [`run_to_dir`] with the scene to index given separately (the survey's
 /// own scene is not used).
 fn run_with_scene(
@@ -258,22 +266,23 @@ fn run_with_scene(
     };
     let summary_path = out_dir.join("summary.json");
     let state_path = out_dir.join(REPORT_STATE);
-    let prev = if options.resume {
-        Some(read_interrupted(survey, out_dir)?)
-    } else {
-        std::fs::create_dir_all(out_dir).map_err(|e| RunError {
-            path: out_dir.to_path_buf(),
-            source: io::Error::new(e.kind(), format!("cannot create the output directory: {e}")),
-        })?;
-        // A summary, report or state of an earlier run must not describe
-        // this one.
-        for path in [&summary_path, &state_path, &out_dir.join("report.html")] {
-            match std::fs::remove_file(path) {
-                Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(io_err(path)(e)),
-                _ => {}
-            }
+    let names = point_files(survey);
+    let (prev, report_state) = if options.resume {
+        if survey.output.formats.laz {
+            return Err(RunError {
+                path: summary_path,
+                source: io::Error::new(
+                    io::ErrorKind::Unsupported,
+                    "this run wrote LAZ, which cannot be continued: run the survey again",
+                ),
+            });
         }
-        None
+        let (prev, state) = resume::read(out_dir, survey, &names)?;
+        (Some(prev), state)
+    } else {
+        outdir::check_inputs(out_dir, &input_files(survey))?;
+        outdir::prepare_fresh(out_dir, options.overwrite)?;
+        (None, Vec::new())
     };
 
     let index_timer = Timer::start();
@@ -287,106 +296,18 @@ fn run_with_scene(
         }
     }
 
-    let mut files = Vec::new();
-    let mut sinks: Vec<Box<dyn PointSink>> = Vec::new();
-    let formats = &survey.output.formats;
-    let origin = survey.output.offset_m.to_array();
-    // Files a resumed run continues: uncompressed LAS without waveforms and
-    // XYZ. LAZ, PLY and full-waveform output are finished when a run is
-    // interrupted but cannot be continued.
-    let point_files = [("points.las", formats.las), ("points.xyz", formats.xyz)];
-    if let Some(prev) = &prev
-        && (formats.laz || formats.ply || formats.las_waveform)
-    {
-        let _ = prev;
-        return Err(RunError {
-            path: summary_path.clone(),
-            source: io::Error::new(
-                io::ErrorKind::Unsupported,
-                "this run writes LAZ, PLY or full-waveform files, which cannot be continued: \
-                 run the survey again",
-            ),
-        });
-    }
-    // A waveform file from an earlier run must not sit beside this one's
-    // points.
-    let wdp_path = out_dir.join("points.wdp");
-    if !formats.las_waveform {
-        match std::fs::remove_file(&wdp_path) {
-            Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(io_err(&wdp_path)(e)),
-            _ => {}
-        }
-    }
-    if formats.las {
-        let path = out_dir.join("points.las");
-        let mut settings = las_settings(survey, &bvh);
-        if formats.las_waveform {
-            settings.waveform = Some(digitizer(survey, &bvh));
-        }
-        let sink: Box<dyn PointSink> = match &prev {
-            None => Box::new(LasWriter::create(&path, settings).map_err(io_err(&path))?),
-            Some(prev) => Box::new(
-                LasWriter::resume(
-                    &path,
-                    settings,
-                    recorded_len(prev, "points.las", &summary_path)?,
-                )
-                .map_err(|e| run_error(out_dir, e))?,
-            ),
-        };
-        sinks.push(sink);
-        files.push("points.las".to_string());
-        if formats.las_waveform {
-            files.push("points.wdp".to_string());
-        }
-    }
-    if formats.laz {
-        let path = out_dir.join("points.laz");
-        // With "las-waveform" too, the LAZ points are format 9 and refer to
-        // the points.wdp the LAS writer writes (same base name, same
-        // packets).
-        let settings = LasSettings {
-            compressed: true,
-            waveform: formats.las_waveform.then(|| digitizer(survey, &bvh)),
-            waveform_file_shared: true,
-            ..las_settings(survey, &bvh)
-        };
-        sinks.push(Box::new(
-            LasWriter::create(&path, settings).map_err(io_err(&path))?,
-        ));
-        files.push("points.laz".to_string());
-    }
-    if formats.ply {
-        let path = out_dir.join("points.ply");
-        sinks.push(Box::new(
-            PlyWriter::create(&path, origin).map_err(io_err(&path))?,
-        ));
-        files.push("points.ply".to_string());
-    }
-    if formats.xyz {
-        let path = out_dir.join("points.xyz");
-        let sink: Box<dyn PointSink> = match &prev {
-            None => Box::new(XyzWriter::create(&path, origin).map_err(io_err(&path))?),
-            Some(prev) => Box::new(
-                XyzWriter::resume(
-                    &path,
-                    recorded_len(prev, "points.xyz", &summary_path)?,
-                    origin,
-                )
-                .map_err(|e| run_error(out_dir, e))?,
-            ),
-        };
-        sinks.push(sink);
-        files.push("points.xyz".to_string());
-    }
+    let mut sinks = open_sinks(survey, &bvh, out_dir, prev.as_ref())?;
+    let mut files: Vec<String> = names.iter().map(|n| n.to_string()).collect();
 
     // The survey as run, with the seed fixed and file paths made absolute,
     // so `lidarsim run DIR/survey.toml` repeats it and `lidarsim waveform`
-    // can simulate any pulse again.
+    // can simulate any pulse again (a resumed run has it already).
     let survey_path = out_dir.join("survey.toml");
-    let text = toml::to_string(&replayable(survey))
-        .map_err(|e| io_err(&survey_path)(io::Error::other(e)))?;
-    write_atomic(&survey_path, text.as_bytes()).map_err(io_err(&survey_path))?;
+    if prev.is_none() {
+        let text = toml::to_string(&replayable(survey))
+            .map_err(|e| io_err(&survey_path)(io::Error::other(e)))?;
+        write_atomic(&survey_path, text.as_bytes()).map_err(io_err(&survey_path))?;
+    }
     files.push("survey.toml".to_string());
 
     // The trajectory flown (trajectory.csv, kept under its first name, and
@@ -397,7 +318,9 @@ fn run_with_scene(
         ("trajectory_observed.csv", true),
     ] {
         let path = out_dir.join(name);
-        write_trajectory(survey, &path, observed).map_err(io_err(&path))?;
+        if prev.is_none() {
+            write_trajectory(survey, &path, observed).map_err(io_err(&path))?;
+        }
         files.push(name.to_string());
     }
 
@@ -406,22 +329,12 @@ fn run_with_scene(
     let mut start = PulsePosition::default();
     let mut wall_before = 0.0;
     if let Some(prev) = &prev {
-        let state = std::fs::read(&state_path).map_err(io_err(&state_path))?;
-        report.restore(&state).map_err(io_err(&state_path))?;
-        before.pulses = prev.pulses;
-        before.points = prev.points;
-        before.pulses_with_echo = prev.pulses_with_echo;
-        for (a, b) in before
-            .points_by_return
-            .iter_mut()
-            .zip(&prev.points_by_return)
-        {
-            *a = *b;
-        }
-        start = prev.next_pulse.unwrap_or_default();
+        report.restore(&report_state).map_err(io_err(&state_path))?;
+        before = prev.counts();
+        start = prev.start();
         wall_before = prev.wall_time_s;
     }
-    let sim = Simulator::new(survey, &bvh).with_waveforms(formats.las_waveform);
+    let sim = Simulator::new(survey, &bvh).with_waveforms(survey.output.formats.las_waveform);
     let timer = Timer::start();
     let mut refs: Vec<&mut (dyn PointSink + 'static)> =
         sinks.iter_mut().map(|b| b.as_mut()).collect();
@@ -446,61 +359,48 @@ fn run_with_scene(
     };
     let mut counts = before;
     counts.add(&outcome.counts);
-    for s in sinks {
-        s.finish().map_err(|e| run_error(out_dir, e))?;
-    }
-    let wall_time_s = wall_before + timer.seconds();
+    let measured = |counts: RunCounts| Measured {
+        counts,
+        threads: options.threads,
+        wall_time_s: wall_before + timer.seconds(),
+        index_time_s,
+        scene_primitives: bvh.scene().primitives.len(),
+    };
 
     if let Some(next) = outcome.stopped_at {
         // Interrupted: every point file is finished for the pulses before
-        // `next`; keep what the report gathered and say where to go on.
-        let mut bytes = BTreeMap::new();
-        for (name, wanted) in point_files {
-            if wanted {
-                let path = out_dir.join(name);
-                let len = std::fs::metadata(&path).map_err(io_err(&path))?.len();
-                bytes.insert(name.to_string(), len);
-            }
+        // `next` but keeps its `.partial` name; the report's state and the
+        // record of the files let a resumed run go on.
+        for s in sinks {
+            s.suspend().map_err(|e| run_error(out_dir, e))?;
         }
         let mut state = Vec::new();
         report.save(&mut state).map_err(io_err(&state_path))?;
         write_atomic(&state_path, &state).map_err(io_err(&state_path))?;
+        let next = NextPulse::of(next);
+        let record = resume::record(out_dir, &names, survey.seed, next, &counts, &state)
+            .map_err(|e| run_error(out_dir, e))?;
+        for f in files.iter_mut().take(names.len()) {
+            f.push_str(".partial");
+        }
         files.push(REPORT_STATE.to_string());
         files.push("summary.json".to_string());
-        let mut summary = summarize(
-            survey,
-            &counts,
-            options.threads,
-            wall_time_s,
-            index_time_s,
-            plan,
-            files,
-            bvh.scene().primitives.len(),
-        );
-        summary.warnings.extend(scene_warnings);
+        let mut summary = Summary::of(survey, plan, &measured(counts), files, &scene_warnings);
         summary.complete = false;
         summary.next_pulse = Some(next);
-        summary.point_file_bytes = Some(bytes);
+        summary.resume = Some(record);
         let json =
             serde_json::to_vec_pretty(&summary).map_err(|e| io_err(&summary_path)(e.into()))?;
         write_atomic(&summary_path, &json).map_err(io_err(&summary_path))?;
         return Ok(summary);
     }
+    for s in sinks {
+        s.finish().map_err(|e| run_error(out_dir, e))?;
+    }
 
     files.push("report.html".to_string());
     files.push("summary.json".to_string());
-    let summary = summarize(
-        survey,
-        &counts,
-        options.threads,
-        wall_time_s,
-        index_time_s,
-        plan,
-        files,
-        bvh.scene().primitives.len(),
-    );
-    let mut summary = summary;
-    summary.warnings.extend(scene_warnings);
+    let summary = Summary::of(survey, plan, &measured(counts), files, &scene_warnings);
     // The report, with the waveforms of a pulse with the most echoes and of
     // a single-echo pulse, simulated again.
     let mut waveforms = Vec::new();
@@ -530,60 +430,6 @@ fn run_with_scene(
         _ => {}
     }
     Ok(summary)
-}
-
-#[allow(clippy::too_many_arguments)]
-fn summarize(
-    survey: &Survey,
-    counts: &RunCounts,
-    threads: usize,
-    wall_time_s: f64,
-    index_time_s: f64,
-    plan: Plan,
-    files: Vec<String>,
-    scene_primitives: usize,
-) -> Summary {
-    let last = counts
-        .points_by_return
-        .iter()
-        .rposition(|&n| n > 0)
-        .map_or(0, |i| i + 1);
-    Summary {
-        lidarsim_version: env!("CARGO_PKG_VERSION"),
-        complete: true,
-        next_pulse: None,
-        point_file_bytes: None,
-        seed: survey.seed,
-        threads,
-        pulses: counts.pulses,
-        points: counts.points,
-        pulses_with_echo: counts.pulses_with_echo,
-        points_by_return: counts.points_by_return[..last].to_vec(),
-        subrays_per_pulse: survey.scanner.subrays,
-        wavelength_nm: survey.scanner.wavelength_nm,
-        wall_time_s,
-        index_time_s,
-        pulses_per_second: if wall_time_s > 0.0 {
-            counts.pulses as f64 / wall_time_s
-        } else {
-            0.0
-        },
-        swath_width_m: plan.swath_width_m,
-        point_density_per_m2: plan.point_density_per_m2,
-        footprint_diameter_m: plan.footprint_diameter_m,
-        gps_time: if survey.output.gps_start_time_s.is_some() {
-            "adjusted standard GPS time (GPS seconds minus 1e9), flight start at output.gps_start_time_s"
-        } else {
-            "seconds since the start of the flight"
-        },
-        intensity_gain: survey.intensity_gain,
-        reference_range_m: survey.receiver.reference_range_m,
-        scene_primitives,
-        files,
-        warnings: survey.warnings.clone(),
-        forest_trees: survey.forest_trees.clone(),
-        plan,
-    }
 }
 
 /// The part of the scene the flight lines can see: each line's bounding box
@@ -745,7 +591,7 @@ pub fn write_trajectory(survey: &Survey, path: &Path, observed: bool) -> io::Res
                 p.attitude.roll_rad.to_degrees(),
                 p.attitude.pitch_rad.to_degrees(),
                 p.attitude.yaw_rad.to_degrees(),
-                line.index
+                line.index + 1
             )?;
         }
     }

@@ -1,0 +1,226 @@
+//! The output directory of a run: the names a run writes, and the rules
+//! that keep a run from destroying what it did not write.
+//!
+//! A run writes into a new or empty directory, or into one an earlier run
+//! wrote (it holds [`MARKER`]); then only the files a run writes
+//! ([`RUN_FILES`], also under their `.partial` names) are removed first, so
+//! that no file of the earlier run sits beside this run's summary. A
+//! directory holding anything else is refused unless the caller overwrites
+//! explicitly, and even then only the run's own names are removed. No run
+//! ever writes over one of its own input files.
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+use super::RunError;
+
+/// The file that marks a directory as one a run wrote into.
+pub const MARKER: &str = ".lidarsim-output";
+
+/// Every file a run may write, by its final name.
+pub const RUN_FILES: [&str; 12] = [
+    "points.las",
+    "points.laz",
+    "points.ply",
+    "points.xyz",
+    "points.wdp",
+    "survey.toml",
+    "trajectory.csv",
+    "trajectory_true.csv",
+    "trajectory_observed.csv",
+    "summary.json",
+    "report.html",
+    super::REPORT_STATE,
+];
+
+/// Whether `name` is a file a run writes: one of [`RUN_FILES`], the same
+/// with `.partial` (a file being written), or the [`MARKER`].
+pub fn is_run_file(name: &str) -> bool {
+    let base = name.strip_suffix(".partial").unwrap_or(name);
+    name == MARKER || RUN_FILES.contains(&base)
+}
+
+fn error(path: &Path, kind: io::ErrorKind, message: String) -> RunError {
+    RunError {
+        path: path.to_path_buf(),
+        source: io::Error::new(kind, message),
+    }
+}
+
+/// Refuses an output directory in which a run would write over one of its
+/// `inputs` (the survey file, meshes, rasters, clouds, trajectory file).
+pub fn check_inputs(dir: &Path, inputs: &[PathBuf]) -> Result<(), RunError> {
+    let Ok(dir) = std::fs::canonicalize(dir) else {
+        // A directory that does not exist yet holds no input.
+        return Ok(());
+    };
+    for input in inputs {
+        let (Some(name), Ok(full)) = (input.file_name(), std::fs::canonicalize(input)) else {
+            continue;
+        };
+        let name = name.to_string_lossy();
+        if full.parent() == Some(dir.as_path()) && is_run_file(&name) {
+            return Err(error(
+                input,
+                io::ErrorKind::AlreadyExists,
+                format!(
+                    "the run would write over this input file (a run writes {name} into its \
+                     output directory {}): choose another output directory",
+                    dir.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Makes `dir` ready for a fresh run: created if missing; an empty
+/// directory or one an earlier run wrote (it holds [`MARKER`]) has the
+/// files a run writes removed; any other non-empty directory is refused
+/// unless `overwrite`, which removes only the files a run writes and
+/// leaves the rest. The marker is written last.
+pub fn prepare_fresh(dir: &Path, overwrite: bool) -> Result<(), RunError> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(error(
+            dir,
+            io::ErrorKind::AlreadyExists,
+            "is not a directory: choose a directory for the output".into(),
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| RunError {
+        path: dir.to_path_buf(),
+        source: io::Error::new(e.kind(), format!("cannot create the output directory: {e}")),
+    })?;
+    let listed = |e: io::Error| RunError {
+        path: dir.to_path_buf(),
+        source: e,
+    };
+    let mut ours = Vec::new();
+    let mut others = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(listed)? {
+        let entry = entry.map_err(listed)?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if is_run_file(&name) {
+            ours.push(entry.path());
+        } else {
+            others.push(name);
+        }
+    }
+    let marked = dir.join(MARKER).exists();
+    if !others.is_empty() && !marked && !overwrite {
+        others.sort();
+        let shown: Vec<&str> = others.iter().take(5).map(String::as_str).collect();
+        let more = if others.len() > 5 {
+            format!(" and {} more", others.len() - 5)
+        } else {
+            String::new()
+        };
+        return Err(error(
+            dir,
+            io::ErrorKind::AlreadyExists,
+            format!(
+                "the output directory is not empty and no lidarsim run wrote it (it holds {}{more}): \
+                 choose a new or empty directory, or pass --overwrite to replace only the \
+                 files a run writes ({}) and keep the rest",
+                shown.join(", "),
+                RUN_FILES.join(", ")
+            ),
+        ));
+    }
+    for path in ours {
+        let meta = std::fs::symlink_metadata(&path).map_err(|e| RunError {
+            path: path.clone(),
+            source: e,
+        })?;
+        if meta.is_dir() {
+            return Err(error(
+                &path,
+                io::ErrorKind::AlreadyExists,
+                "is a directory where the run writes a file: move it away".into(),
+            ));
+        }
+        // A symbolic link is removed itself, never what it points to.
+        std::fs::remove_file(&path).map_err(|e| RunError {
+            path: path.clone(),
+            source: e,
+        })?;
+    }
+    crate::output::write_atomic(
+        &dir.join(MARKER),
+        b"lidarsim writes its runs into this directory; a new run replaces only its own files.\n",
+    )
+    .map_err(|e| RunError {
+        path: dir.join(MARKER),
+        source: e,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn temp(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("lidarsim-outdir-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn run_files_are_recognised_with_their_partial_names() {
+        assert!(is_run_file("points.las"));
+        assert!(is_run_file("points.las.partial"));
+        assert!(is_run_file(MARKER));
+        assert!(!is_run_file("points.las.bak"));
+        assert!(!is_run_file("notes.txt"));
+    }
+
+    #[test]
+    fn a_foreign_directory_is_refused_unless_overwritten_and_keeps_its_files() {
+        let d = temp("foreign");
+        std::fs::write(d.join("notes.txt"), "mine").unwrap();
+        std::fs::write(d.join("points.las"), "old").unwrap();
+        let e = prepare_fresh(&d, false).unwrap_err();
+        assert!(e.to_string().contains("notes.txt"), "{e}");
+        assert!(e.to_string().contains("--overwrite"), "{e}");
+        assert_eq!(std::fs::read(d.join("points.las")).unwrap(), b"old");
+        prepare_fresh(&d, true).unwrap();
+        assert!(!d.join("points.las").exists());
+        assert_eq!(std::fs::read(d.join("notes.txt")).unwrap(), b"mine");
+        assert!(d.join(MARKER).exists());
+        // Now marked: a second run clears its own files without asking.
+        std::fs::write(d.join("points.xyz"), "old").unwrap();
+        prepare_fresh(&d, false).unwrap();
+        assert!(!d.join("points.xyz").exists());
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_planted_link_is_removed_not_followed() {
+        let d = temp("link");
+        let out = d.join("out");
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::write(out.join(MARKER), "").unwrap();
+        let victim = d.join("victim.txt");
+        std::fs::write(&victim, "precious").unwrap();
+        std::os::unix::fs::symlink(&victim, out.join("points.las.partial")).unwrap();
+        prepare_fresh(&out, false).unwrap();
+        assert!(!out.join("points.las.partial").exists());
+        assert_eq!(std::fs::read(&victim).unwrap(), b"precious");
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    #[test]
+    fn an_input_among_the_run_files_is_refused() {
+        let d = temp("inputs");
+        let survey = d.join("survey.toml");
+        std::fs::write(&survey, "# mine").unwrap();
+        let e = check_inputs(&d, std::slice::from_ref(&survey)).unwrap_err();
+        assert!(e.to_string().contains("write over this input"), "{e}");
+        let other = d.join("my-survey.toml");
+        std::fs::write(&other, "# mine").unwrap();
+        check_inputs(&d, &[other]).unwrap();
+        std::fs::remove_dir_all(&d).ok();
+    }
+}

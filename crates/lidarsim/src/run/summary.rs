@@ -1,0 +1,150 @@
+//! `summary.json`: what a run did, the parameters it used and what it
+//! expected (the plan), and, for an interrupted run, where to go on.
+
+use serde::Serialize;
+
+use super::resume::{NextPulse, ResumeState};
+use crate::plan::Plan;
+use crate::sim::RunCounts;
+use crate::survey::Survey;
+
+/// Contents of `summary.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// Version of the simulator.
+    pub lidarsim_version: &'static str,
+    /// True when every pulse was simulated and every file written; false
+    /// for a run that was interrupted (see `next_pulse`): its point files
+    /// are then complete for the pulses simulated but keep their
+    /// `.partial` names.
+    pub complete: bool,
+    /// Whether `lidarsim run --resume` can continue this run when it is
+    /// interrupted (not when it writes LAZ).
+    pub resumable: bool,
+    /// Of an interrupted run: the first pulse not simulated, where
+    /// `lidarsim run --resume` continues (flight line 1 is the first).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub next_pulse: Option<NextPulse>,
+    /// Of an interrupted run: the state of its files, which a resumed run
+    /// checks before it appends to them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub resume: Option<ResumeState>,
+    /// Seed of the random streams.
+    pub seed: u64,
+    /// Threads the run used (the one that wrote the output among them).
+    pub threads: usize,
+    /// Pulses emitted.
+    pub pulses: u64,
+    /// Points written.
+    pub points: u64,
+    /// Pulses with at least one echo.
+    pub pulses_with_echo: u64,
+    /// Points by return number (first, second, …).
+    pub points_by_return: Vec<u64>,
+    /// Sub-rays per pulse.
+    pub subrays_per_pulse: usize,
+    /// Laser wavelength, nm (for the record: reflectances are given at it).
+    pub wavelength_nm: f64,
+    /// Wall-clock time of the simulation (scene indexing excluded), s;
+    /// summed over the sessions of a resumed run.
+    pub wall_time_s: f64,
+    /// Time to build the acceleration structure, s.
+    pub index_time_s: f64,
+    /// Simulated pulses per wall-clock second.
+    pub pulses_per_second: f64,
+    /// Expected swath width (pulse-weighted mean over lines), m.
+    pub swath_width_m: f64,
+    /// Expected point density of one line, per m².
+    pub point_density_per_m2: f64,
+    /// Expected nadir footprint diameter, m.
+    pub footprint_diameter_m: f64,
+    /// What the GPS time of the points means.
+    pub gps_time: &'static str,
+    /// LAS intensity per unit of echo energy amplitude.
+    pub intensity_gain: f64,
+    /// Reference range of Eq. 2, m.
+    pub reference_range_m: f64,
+    /// Primitives in the scene.
+    pub scene_primitives: usize,
+    /// Files written, relative to the output directory (an interrupted
+    /// run's point files under their `.partial` names).
+    pub files: Vec<String>,
+    /// Warnings about the survey (see `lidarsim check`).
+    pub warnings: Vec<String>,
+    /// Trees placed by each `[[forest]]` entry.
+    pub forest_trees: Vec<usize>,
+    /// The expected figures per flight line.
+    pub plan: Plan,
+}
+
+/// What a run measured, beside the survey and its plan.
+pub struct Measured {
+    /// Counts over every session of the run.
+    pub counts: RunCounts,
+    /// Threads of this session.
+    pub threads: usize,
+    /// Simulation time over every session, s.
+    pub wall_time_s: f64,
+    /// Time to build the acceleration structure, s.
+    pub index_time_s: f64,
+    /// Primitives in the scene.
+    pub scene_primitives: usize,
+}
+
+impl Summary {
+    /// The summary of a complete run of `survey` (the interrupted fields
+    /// unset), its warnings followed by `scene_warnings`.
+    pub fn of(
+        survey: &Survey,
+        plan: Plan,
+        m: &Measured,
+        files: Vec<String>,
+        scene_warnings: &[String],
+    ) -> Self {
+        let counts = &m.counts;
+        let last = counts
+            .points_by_return
+            .iter()
+            .rposition(|&n| n > 0)
+            .map_or(0, |i| i + 1);
+        let mut warnings = survey.warnings.clone();
+        warnings.extend_from_slice(scene_warnings);
+        Summary {
+            lidarsim_version: env!("CARGO_PKG_VERSION"),
+            complete: true,
+            resumable: !survey.output.formats.laz,
+            next_pulse: None,
+            resume: None,
+            seed: survey.seed,
+            threads: m.threads,
+            pulses: counts.pulses,
+            points: counts.points,
+            pulses_with_echo: counts.pulses_with_echo,
+            points_by_return: counts.points_by_return[..last].to_vec(),
+            subrays_per_pulse: survey.scanner.subrays,
+            wavelength_nm: survey.scanner.wavelength_nm,
+            wall_time_s: m.wall_time_s,
+            index_time_s: m.index_time_s,
+            pulses_per_second: if m.wall_time_s > 0.0 {
+                counts.pulses as f64 / m.wall_time_s
+            } else {
+                0.0
+            },
+            swath_width_m: plan.swath_width_m,
+            point_density_per_m2: plan.point_density_per_m2,
+            footprint_diameter_m: plan.footprint_diameter_m,
+            gps_time: if survey.output.gps_start_time_s.is_some() {
+                "adjusted standard GPS time (GPS seconds minus 1e9), flight start at output.gps_start_time_s"
+            } else {
+                "seconds since the start of the flight"
+            },
+            intensity_gain: survey.intensity_gain,
+            reference_range_m: survey.receiver.reference_range_m,
+            scene_primitives: m.scene_primitives,
+            files,
+            warnings,
+            forest_trees: survey.forest_trees.clone(),
+            plan,
+        }
+    }
+}
