@@ -62,6 +62,10 @@ enum Command {
         /// the files a run writes there.
         #[arg(long)]
         overwrite: bool,
+        /// Run even if the expected output exceeds the free disk space or
+        /// the expected memory is not available.
+        #[arg(long)]
+        no_space_check: bool,
         /// Also write the demo's survey as a TOML file, to start your own.
         #[arg(long, value_name = "FILE")]
         export_survey: Option<PathBuf>,
@@ -88,6 +92,11 @@ enum Command {
         /// trajectory*.csv, summary.json, report.html) and keeping the rest.
         #[arg(long, conflicts_with = "resume")]
         overwrite: bool,
+        /// Run even if the expected output exceeds the free disk space of
+        /// the output directory or the expected memory is not available
+        /// (see `lidarsim check`).
+        #[arg(long)]
+        no_space_check: bool,
         /// Continue the interrupted run in DIR (with its survey.toml) up to
         /// the files an uninterrupted run would have written.
         #[arg(long, value_name = "DIR", conflicts_with = "survey")]
@@ -97,6 +106,10 @@ enum Command {
     Check {
         /// The survey (TOML).
         survey: PathBuf,
+        /// Output directory whose free space the expected files are
+        /// compared with.
+        #[arg(short, long, default_value = "out")]
+        output: PathBuf,
     },
     /// Plot the full waveform of one pulse of a run (simulated again from its survey.toml).
     Waveform {
@@ -192,6 +205,7 @@ fn main() -> ExitCode {
             seed,
             export_survey,
             overwrite,
+            no_space_check,
         } => {
             let mut raw = lidarsim::demo::demo_survey();
             if seed.is_some() {
@@ -217,7 +231,12 @@ fn main() -> ExitCode {
                     return fail(1, &list.join("\n"));
                 }
             };
-            simulate(survey, &output, threads, false, overwrite)
+            let how = How {
+                resume: false,
+                overwrite,
+                no_space_check,
+            };
+            simulate(survey, &output, threads, how)
         }
         Command::Run {
             survey,
@@ -226,6 +245,7 @@ fn main() -> ExitCode {
             seed,
             resume,
             overwrite,
+            no_space_check,
         } => {
             let (path, output, resuming) = match (resume, survey) {
                 (Some(dir), _) => (dir.join("survey.toml"), dir, true),
@@ -243,7 +263,14 @@ fn main() -> ExitCode {
                 );
             }
             match Survey::load_with_seed(&path, seed) {
-                Ok(s) => simulate(s, &output, threads, resuming, overwrite),
+                Ok(s) => {
+                    let how = How {
+                        resume: resuming,
+                        overwrite,
+                        no_space_check,
+                    };
+                    simulate(s, &output, threads, how)
+                }
                 Err(e) => fail_survey(&e),
             }
         }
@@ -280,10 +307,10 @@ fn main() -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(msg) => fail(1, &msg),
         },
-        Command::Check { survey } => match Survey::load(&survey) {
+        Command::Check { survey, output } => match Survey::load(&survey) {
             Ok(s) => {
                 warn(&s);
-                check(&s);
+                check(&s, &output);
                 ExitCode::SUCCESS
             }
             Err(e) => fail_survey(&e),
@@ -467,13 +494,22 @@ fn hold_until_stopped(done: u64) {
     }
 }
 
-fn simulate(
-    survey: Survey,
-    output: &Path,
-    threads: Option<usize>,
+/// How `simulate` treats the output directory and the machine's limits.
+struct How {
+    /// Continue the interrupted run in the directory.
     resume: bool,
+    /// Write into a foreign non-empty directory.
     overwrite: bool,
-) -> ExitCode {
+    /// Run even when the estimate exceeds disk or memory.
+    no_space_check: bool,
+}
+
+fn simulate(survey: Survey, output: &Path, threads: Option<usize>, how: How) -> ExitCode {
+    let How {
+        resume,
+        overwrite,
+        no_space_check,
+    } = how;
     warn(&survey);
     if survey.output.formats.laz && !resume {
         note!(
@@ -516,6 +552,7 @@ fn simulate(
             stop: Some(&STOP),
             resume,
             overwrite,
+            no_space_check,
             pulse_budget: None,
             on_warning: Some(&|w: &str| {
                 bar.suspend(|| note!("warning: {name}: {w}"));
@@ -746,11 +783,21 @@ fn report(s: &Summary, output: &Path) {
     }
 }
 
-fn check(survey: &Survey) {
+fn check(survey: &Survey, output: &Path) {
+    use lidarsim::budget::{available_memory, estimate, free_bytes, human_bytes};
     let bvh = Bvh::build(survey.scene.clone());
     let p = plan(survey, &bvh);
     for w in lidarsim::plan::warnings(survey, &bvh, &p) {
         note!("warning: {}: {w}", source_name(survey));
+    }
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let b = estimate(survey, &survey.scene, threads);
+    let (free, memory) = (free_bytes(output), available_memory());
+    for s in b.shortfalls(output, free, memory, 1.0) {
+        note!(
+            "warning: {}: {s}: `lidarsim run` will refuse it without --no-space-check",
+            source_name(survey)
+        );
     }
     say!(
         "survey OK: {} flight line(s), {} scene primitives, seed {}",
@@ -770,9 +817,26 @@ fn check(survey: &Survey) {
         p.footprint_diameter_m
     );
     say!(
-        "expected run size:    ~{} points, points.las ~{:.1} MB",
-        p.pulses,
-        p.expected_las_bytes as f64 / 1e6
+        "expected points:      ~{} (one per pulse, more under crowns: {:.0} % of the area)",
+        b.points,
+        b.crown_cover * 100.0
+    );
+    for f in &b.files {
+        say!("  {:<24}~{}", f.name, human_bytes(f.bytes));
+    }
+    say!(
+        "expected output:      ~{}{}",
+        human_bytes(b.total_bytes),
+        free.map_or_else(String::new, |f| format!(
+            " ({} free for {})",
+            human_bytes(f),
+            output.display()
+        ))
+    );
+    say!(
+        "expected memory:      ~{} on {threads} thread(s){}",
+        human_bytes(b.memory_bytes),
+        memory.map_or_else(String::new, |m| format!(" ({} available)", human_bytes(m)))
     );
     for l in &p.lines {
         say!(

@@ -9,6 +9,11 @@ pub use glam::{DMat3, DVec3};
 /// Speed of light in vacuum, m/s.
 pub const SPEED_OF_LIGHT_MPS: f64 = 299_792_458.0;
 
+/// Largest coordinate magnitude accepted anywhere in a scene or flight, m
+/// (beyond any projected coordinate system; the BVH keeps f32 boxes
+/// relative to the scene).
+pub const MAX_COORDINATE_M: f64 = 1e8;
+
 /// A half-line `origin + t · dir`, `t ≥ 0`, with a unit direction
 /// (the specification's pulse path `p + t × dir`).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -50,6 +50,7 @@
 
 pub mod accel;
 pub mod bench;
+pub mod budget;
 pub mod canopy;
 pub mod demo;
 pub mod detection;

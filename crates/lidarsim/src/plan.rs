@@ -51,34 +51,8 @@ pub struct Plan {
     pub point_density_per_m2: f64,
     /// Pulse-weighted mean nadir footprint diameter, m.
     pub footprint_diameter_m: f64,
-    /// Expected size of `points.las` if every pulse gives one point, bytes.
-    pub expected_las_bytes: u64,
     /// Flight time including turns, s.
     pub flight_time_s: f64,
-}
-
-/// Size of `points.las` with one point per pulse: the header, the VLRs
-/// (Extra Bytes: 54 + 192 per field; waveform packet descriptors: 255 ×
-/// (54 + 26); WKT: 54 + its length + 1) and the point records (30 bytes for
-/// format 6 or 59 for format 9, 20 of echo attributes, 12 of error vector).
-fn expected_las_bytes(survey: &Survey, pulses: u64) -> u64 {
-    let o = &survey.output;
-    let errors = !survey.navigation.is_zero();
-    let fields = 5 * u64::from(o.extra_bytes) + 3 * u64::from(errors);
-    let mut header = 375;
-    if fields > 0 {
-        header += 54 + 192 * fields;
-    }
-    if o.formats.las_waveform {
-        header += 255 * (54 + 26);
-    }
-    if let Some(wkt) = &o.crs_wkt {
-        header += 54 + wkt.len() as u64 + 1;
-    }
-    let record = if o.formats.las_waveform { 59 } else { 30 }
-        + 20 * u64::from(o.extra_bytes)
-        + 12 * u64::from(errors);
-    header + record * pulses
 }
 
 /// Height of the ground below `p` (ground, road or water surfaces; any
@@ -98,6 +72,32 @@ pub fn ground_below(caster: &dyn RayCaster, p: DVec3) -> f64 {
         .closest_hit_where(&ray, 0.0, f64::INFINITY, &ground)
         .or_else(|| caster.closest_hit(&ray, 0.0, f64::INFINITY))
         .map_or(0.0, |h| p.z - h.t)
+}
+
+/// A place along `line` where ground (ground, road or water) lies above
+/// the sensor, and how far above: sampled at 17 points along the line.
+fn ground_above(
+    caster: &dyn RayCaster,
+    line: &crate::platform::FlightLine,
+) -> Option<(DVec3, f64)> {
+    let ground = |prim: &crate::scene::Primitive| {
+        matches!(
+            prim.class,
+            SurfaceClass::Ground | SurfaceClass::Road | SurfaceClass::Water
+        )
+    };
+    (0..=16).find_map(|k| {
+        let p = line
+            .pose_at(line.duration_s() * f64::from(k) / 16.0)
+            .position_m;
+        let up = Ray {
+            origin: p,
+            dir: DVec3::Z,
+        };
+        caster
+            .closest_hit_where(&up, 0.0, f64::INFINITY, &ground)
+            .map(|h| (p, h.t))
+    })
 }
 
 /// Computes the plan of `survey` over the scene of `caster`.
@@ -148,7 +148,6 @@ pub fn plan(survey: &Survey, caster: &dyn RayCaster) -> Plan {
         swath_width_m: weighted(|l| l.swath_width_m),
         point_density_per_m2: weighted(|l| l.point_density_per_m2),
         footprint_diameter_m: weighted(|l| l.footprint_diameter_m),
-        expected_las_bytes: expected_las_bytes(survey, pulses),
         flight_time_s,
         pulses,
         lines,
@@ -177,6 +176,15 @@ pub fn warnings(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> Vec<Str
     let mut swaths = Aabb::EMPTY;
     for (line, lp) in survey.lines.iter().zip(&plan.lines) {
         let n = lp.line;
+        if let Some((p, above)) = ground_above(caster, line) {
+            out.push(format!(
+                "flight line {n} flies below the ground: at x {:.1} m, y {:.1} m the ground is \
+                 {above:.1} m above the scanner, whose pulses point down and cannot reach the \
+                 scene; raise the line (its z or altitude_m)",
+                p.x, p.y
+            ));
+            continue;
+        }
         let h = lp.height_above_ground_m;
         let edge = h / theta.cos();
         if h > 0.0 && h < s.min_range_m {

@@ -338,6 +338,23 @@ impl Track {
     }
 }
 
+/// The smallest and largest across-track coordinate of `area` for lines
+/// flown at `heading_rad`.
+fn across_extent(area: &[[f64; 2]], heading_rad: f64) -> (f64, f64) {
+    let right = right_of(heading_rad);
+    area.iter()
+        .map(|p| p[0] * right.x + p[1] * right.y)
+        .fold((f64::MAX, f64::MIN), |(lo, hi), u| (lo.min(u), hi.max(u)))
+}
+
+/// How many lines [`plan_lines`] gives for `area` at `heading_rad` and
+/// `spacing_m` (a float, so that absurd spacings can be refused before
+/// any line is made).
+pub fn plan_line_count(area: &[[f64; 2]], heading_rad: f64, spacing_m: f64) -> f64 {
+    let (u0, u1) = across_extent(area, heading_rad);
+    ((u1 - u0) / spacing_m - 1e-9).ceil().max(1.0)
+}
+
 /// Straight, parallel flight lines covering an area, flown back and forth
 /// (a boustrophedon). `heading_rad` uses the yaw convention (0 = north,
 /// counter-clockwise); `spacing_m` is the distance between lines; lines
@@ -353,9 +370,8 @@ pub fn plan_lines(
     let (fwd, right) = (forward_of(heading_rad), right_of(heading_rad));
     let to_uv = |p: [f64; 2]| (p[0] * right.x + p[1] * right.y, p[0] * fwd.x + p[1] * fwd.y);
     let uv: Vec<(f64, f64)> = area.iter().map(|p| to_uv(*p)).collect();
-    let u0 = uv.iter().map(|p| p.0).fold(f64::MAX, f64::min);
-    let u1 = uv.iter().map(|p| p.0).fold(f64::MIN, f64::max);
-    let n = ((u1 - u0) / spacing_m - 1e-9).ceil().max(1.0) as usize;
+    let (u0, u1) = across_extent(area, heading_rad);
+    let n = plan_line_count(area, heading_rad, spacing_m) as usize;
     // Centre the lines on the area's across-track extent.
     let first = 0.5 * (u0 + u1) - 0.5 * (n as f64 - 1.0) * spacing_m;
     let mut lines = Vec::new();

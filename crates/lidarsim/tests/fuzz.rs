@@ -623,11 +623,12 @@ fn las_point_cloud_bytes_never_panic_and_errors_name_the_file() {
                         .find(|d| d.key == "point_cloud[0].file");
                     // A cloud that reads but lies absurdly far (a mutated
                     // scale or offset) is refused by the scene-wide extent
-                    // check; anything else names the file.
-                    let far = e
-                        .diagnostics
-                        .iter()
-                        .any(|d| d.message.contains("coordinates must lie within ±1e8 m"));
+                    // check, or by the LAS output's coordinate range;
+                    // anything else names the file.
+                    let far = e.diagnostics.iter().any(|d| {
+                        d.message.contains("coordinates must lie within ±1e8 m")
+                            || d.key == "output.las_scale_m"
+                    });
                     prop_assert!(d.is_some() || far, "{e}");
                     if d.is_none() {
                         far_off.set(far_off.get() + 1);

@@ -185,7 +185,9 @@ fn gltf_and_glb_load_with_node_transforms_axes_materials_and_classes() {
     std::fs::write(d.join("nobin.gltf"), json(Some("nowhere.bin".into()))).unwrap();
     let e = survey(&d.join("nobin.gltf"), "").unwrap_err();
     assert!(
-        e.diagnostics[0].message.contains("cannot load its buffers"),
+        e.diagnostics[0]
+            .message
+            .contains("cannot load its buffer 'nowhere.bin'"),
         "{e}"
     );
 }

@@ -284,3 +284,36 @@ fn geotiff_model_transformation_and_rotation() {
     let e = read_raster(&write("rot.tif", 0.3)).unwrap_err().to_string();
     assert!(e.contains("rotates or shears"), "{e}");
 }
+
+/// GeoTIFF heights that are no heights (1e300, infinity) are refused with
+/// the pixel, instead of silently becoming holes; NaN stays nodata.
+#[test]
+fn geotiff_heights_beyond_any_terrain_are_refused() {
+    use tiff::encoder::{TiffEncoder, colortype::Gray64Float};
+    use tiff::tags::Tag;
+    let dir = std::env::temp_dir().join(format!("lidarsim-terrain-big-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let write = |name: &str, bad: f64| {
+        let path = dir.join(name);
+        let mut enc = TiffEncoder::new(std::fs::File::create(&path).unwrap()).unwrap();
+        let mut img = enc.new_image::<Gray64Float>(3, 2).unwrap();
+        img.encoder()
+            .write_tag(Tag::ModelPixelScaleTag, &[1.0, 1.0, 0.0][..])
+            .unwrap();
+        img.encoder()
+            .write_tag(Tag::ModelTiepointTag, &[0.0, 0.0, 0.0, 0.0, 2.0, 0.0][..])
+            .unwrap();
+        let data = [1.0, 2.0, 3.0, 4.0, bad, 6.0];
+        img.write_data(&data).unwrap();
+        path
+    };
+    for bad in [1e300, f64::INFINITY, -1e6] {
+        let e = read_raster(&write("bad.tif", bad)).unwrap_err().to_string();
+        assert!(e.contains("row 2, column 2"), "{bad}: {e}");
+        assert!(e.contains("GDAL_NODATA"), "{bad}: {e}");
+    }
+    let g = read_raster(&write("nan.tif", f64::NAN)).unwrap();
+    assert_eq!(g.height(1, 0), None);
+    assert_eq!(g.height(0, 0), Some(4.0));
+    std::fs::remove_dir_all(&dir).ok();
+}

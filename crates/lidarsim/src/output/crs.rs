@@ -37,6 +37,12 @@ pub fn parse_epsg(text: &str) -> Option<u32> {
 /// balance, no NUL byte. Returns what is wrong.
 pub fn check_wkt(wkt: &str) -> Result<(), String> {
     let t = wkt.trim();
+    if t.len() > MAX_WKT_BYTES {
+        return Err(format!(
+            "is {} bytes long; a LAS file's WKT record holds at most {MAX_WKT_BYTES} bytes",
+            t.len()
+        ));
+    }
     let keyword: String = t
         .chars()
         .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
@@ -85,6 +91,10 @@ pub fn check_wkt(wkt: &str) -> Result<(), String> {
 const WGS84: &str = r#"GEOGCS["WGS 84",DATUM["WGS_1984",SPHEROID["WGS 84",6378137,298.257223563,AUTHORITY["EPSG","7030"]],AUTHORITY["EPSG","6326"]],PRIMEM["Greenwich",0,AUTHORITY["EPSG","8901"]],UNIT["degree",0.0174532925199433,AUTHORITY["EPSG","9122"]],AUTHORITY["EPSG","4326"]]"#;
 const ETRS89: &str = r#"GEOGCS["ETRS89",DATUM["European_Terrestrial_Reference_System_1989",SPHEROID["GRS 1980",6378137,298.257222101,AUTHORITY["EPSG","7019"]],AUTHORITY["EPSG","6258"]],PRIMEM["Greenwich",0,AUTHORITY["EPSG","8901"]],UNIT["degree",0.0174532925199433,AUTHORITY["EPSG","9122"]],AUTHORITY["EPSG","4258"]]"#;
 const NAD83: &str = r#"GEOGCS["NAD83",DATUM["North_American_Datum_1983",SPHEROID["GRS 1980",6378137,298.257222101,AUTHORITY["EPSG","7019"]],AUTHORITY["EPSG","6269"]],PRIMEM["Greenwich",0,AUTHORITY["EPSG","8901"]],UNIT["degree",0.0174532925199433,AUTHORITY["EPSG","9122"]],AUTHORITY["EPSG","4269"]]"#;
+
+/// Longest WKT a LAS 1.4 VLR can hold: its length field is 16 bits and
+/// the text ends with a NUL (LAS 1.4 R15, Table 13).
+pub const MAX_WKT_BYTES: usize = 65_534;
 
 /// WKT 1 of a Transverse Mercator system with UTM parameters.
 fn tm_wkt(title: &str, geog: &str, central_meridian: i32, south: bool, code: u32) -> String {

@@ -128,6 +128,138 @@ pub struct LasSettings {
     pub waveform_file_shared: bool,
 }
 
+impl LasSettings {
+    /// The point data record format: 6, or 9 with waveforms.
+    pub fn point_format(&self) -> u8 {
+        if self.waveform.is_some() { 9 } else { 6 }
+    }
+
+    /// The extra-bytes fields, in record order.
+    fn extra_fields(&self) -> impl Iterator<Item = &'static ExtraField> {
+        let a: &'static [ExtraField] = if self.attribute_extra_bytes {
+            &ATTRIBUTE_FIELDS
+        } else {
+            &[]
+        };
+        let e: &'static [ExtraField] = if self.error_extra_bytes {
+            &ERROR_FIELDS
+        } else {
+            &[]
+        };
+        a.iter().chain(e.iter())
+    }
+
+    fn extra_bytes_len(&self) -> u16 {
+        self.extra_fields().map(ExtraField::size).sum()
+    }
+
+    /// Bytes of one point record.
+    pub fn record_len(&self) -> u16 {
+        let base = if self.point_format() == 9 {
+            POINT_FORMAT_9_LEN
+        } else {
+            POINT_FORMAT_6_LEN
+        };
+        base + self.extra_bytes_len()
+    }
+
+    /// The LASzip description of the point record: point 14 (+ wave packet
+    /// 14) + extra bytes, layered chunked compression.
+    fn laz_vlr(&self) -> io::Result<LazVlr> {
+        let items = LazItemRecordBuilder::default_for_point_format_id(
+            self.point_format(),
+            self.extra_bytes_len(),
+        )
+        .map_err(io::Error::other)?;
+        Ok(LazVlr::from_laz_items(items))
+    }
+
+    /// The VLRs between the header and the points.
+    fn vlr_list(&self) -> io::Result<Vec<Vlr>> {
+        let mut list = Vec::new();
+        let fields: Vec<&ExtraField> = self.extra_fields().collect();
+        if !fields.is_empty() {
+            let mut d = Vec::with_capacity(fields.len() * EXTRA_BYTES_DESCRIPTOR_LEN);
+            for f in fields {
+                // Extra Bytes descriptor (Table 24): reserved (2), data type,
+                // options 0 (no no-data/min/max/scale/offset), name (32),
+                // unused (4), no_data, min, max, scale, offset (5 × 24),
+                // description (32).
+                d.extend_from_slice(&[0, 0, f.data_type, 0]);
+                d.extend_from_slice(&fixed_str::<32>(f.name));
+                d.extend_from_slice(&[0u8; 4]);
+                d.extend_from_slice(&[0u8; 24 * 5]);
+                d.extend_from_slice(&fixed_str::<32>(f.description));
+            }
+            list.push(("LASF_Spec", 4, "extra bytes".to_string(), d));
+        }
+        if let Some(dig) = self.waveform {
+            for i in 1..=WAVEFORM_DESCRIPTORS {
+                // Waveform Packet Descriptor (Table 17): bits per sample,
+                // compression type 0, number of samples, temporal sample
+                // spacing (ps), digitizer gain, digitizer offset
+                // (volts = offset + gain · sample).
+                let mut d = Vec::with_capacity(WAVE_DESCRIPTOR_LEN);
+                d.push(WAVEFORM_BITS);
+                d.push(0);
+                d.extend_from_slice(&((i * WAVEFORM_SAMPLES_STEP) as u32).to_le_bytes());
+                d.extend_from_slice(&dig.bin_ps.to_le_bytes());
+                d.extend_from_slice(&dig.gain.to_le_bytes());
+                d.extend_from_slice(&dig.offset.to_le_bytes());
+                debug_assert_eq!(d.len(), WAVE_DESCRIPTOR_LEN);
+                list.push((
+                    "LASF_Spec",
+                    99 + i as u16,
+                    format!("{} samples", i * WAVEFORM_SAMPLES_STEP),
+                    d,
+                ));
+            }
+        }
+        if let Some(wkt) = &self.crs_wkt {
+            // OGC coordinate system WKT (section 2.5): a null-terminated
+            // string.
+            let mut d = wkt.as_bytes().to_vec();
+            d.push(0);
+            if d.len() > usize::from(u16::MAX) {
+                return Err(io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    "the CRS WKT is longer than a VLR can hold (65535 bytes)",
+                ));
+            }
+            list.push(("LASF_Projection", 2112, "OGC WKT".to_string(), d));
+        }
+        if self.compressed {
+            let mut d = Vec::new();
+            self.laz_vlr()?.write_to(&mut d)?;
+            list.push(("laszip encoded", 22204, "lazrs".to_string(), d));
+        }
+        Ok(list)
+    }
+
+    /// The VLRs' bytes.
+    fn vlrs(&self) -> io::Result<Vec<u8>> {
+        let mut v = Vec::new();
+        for (user, id, description, data) in self.vlr_list()? {
+            // VLR header (Table 13): reserved, user ID, record ID, record
+            // length after header, description.
+            v.extend_from_slice(&0u16.to_le_bytes());
+            v.extend_from_slice(&fixed_str::<16>(user));
+            v.extend_from_slice(&id.to_le_bytes());
+            v.extend_from_slice(&(data.len() as u16).to_le_bytes());
+            v.extend_from_slice(&fixed_str::<32>(&description));
+            v.extend_from_slice(&data);
+        }
+        Ok(v)
+    }
+
+    /// Length of an uncompressed LAS file of `points` points with these
+    /// settings: header, VLRs and point records.
+    pub fn file_len(&self, points: u64) -> u64 {
+        let vlrs = self.vlrs().map_or(0, |v| v.len() as u64);
+        u64::from(HEADER_SIZE) + vlrs + points * u64::from(self.record_len())
+    }
+}
+
 /// One extra-bytes field (LAS 1.4 R15, Table 24).
 struct ExtraField {
     name: &'static str,
@@ -280,14 +412,14 @@ impl LasWriter {
             buf: Vec::with_capacity(LAS_WRITE_BYTES + (1 << 16)),
         };
         let header = w.header();
-        let vlrs = w.vlrs()?;
+        let vlrs = w.settings.vlrs()?;
         let named = |e| file_error(path, e);
         w.file.writer().write_all(&header).map_err(named)?;
         w.file.writer().write_all(&vlrs).map_err(named)?;
         if w.settings.compressed {
             let writer = w.file.take_writer();
             let compressor =
-                LasZipCompressor::new(writer, w.laz_vlr()?).map_err(io::Error::other)?;
+                LasZipCompressor::new(writer, w.settings.laz_vlr()?).map_err(io::Error::other)?;
             w.body = Body::Laz(Box::new(compressor));
         }
         Ok(w)
@@ -354,8 +486,8 @@ impl LasWriter {
             *n = u64_at(255 + 8 * i);
         }
         let s = &w.settings;
-        let offset_to_points = u64::from(HEADER_SIZE) + w.vlrs()?.len() as u64;
-        if u16_at(105) != w.record_len()
+        let offset_to_points = u64::from(HEADER_SIZE) + w.settings.vlrs()?.len() as u64;
+        if u16_at(105) != w.settings.record_len()
             || u64::from(u32_at(96)) != offset_to_points
             || (0..3)
                 .any(|a| f64_at(131 + 8 * a) != s.scale_m || f64_at(155 + 8 * a) != s.offset_m[a])
@@ -366,7 +498,7 @@ impl LasWriter {
         }
         let expected = w
             .count
-            .checked_mul(u64::from(w.record_len()))
+            .checked_mul(u64::from(w.settings.record_len()))
             .and_then(|b| b.checked_add(offset_to_points));
         if expected != Some(len) {
             return Err(bad(format!(
@@ -455,137 +587,10 @@ impl LasWriter {
         }
     }
 
-    /// The point data record format: 6, or 9 with waveforms.
-    pub fn point_format(&self) -> u8 {
-        if self.settings.waveform.is_some() {
-            9
-        } else {
-            6
-        }
-    }
-
-    /// The extra-bytes fields, in record order.
-    fn extra_fields(&self) -> impl Iterator<Item = &'static ExtraField> {
-        let a: &'static [ExtraField] = if self.settings.attribute_extra_bytes {
-            &ATTRIBUTE_FIELDS
-        } else {
-            &[]
-        };
-        let e: &'static [ExtraField] = if self.settings.error_extra_bytes {
-            &ERROR_FIELDS
-        } else {
-            &[]
-        };
-        a.iter().chain(e.iter())
-    }
-
-    fn extra_bytes_len(&self) -> u16 {
-        self.extra_fields().map(ExtraField::size).sum()
-    }
-
-    /// Bytes of one point record.
-    pub fn record_len(&self) -> u16 {
-        let base = if self.point_format() == 9 {
-            POINT_FORMAT_9_LEN
-        } else {
-            POINT_FORMAT_6_LEN
-        };
-        base + self.extra_bytes_len()
-    }
-
-    /// The LASzip description of the point record: point 14 (+ wave packet
-    /// 14) + extra bytes, layered chunked compression.
-    fn laz_vlr(&self) -> io::Result<LazVlr> {
-        let items = LazItemRecordBuilder::default_for_point_format_id(
-            self.point_format(),
-            self.extra_bytes_len(),
-        )
-        .map_err(io::Error::other)?;
-        Ok(LazVlr::from_laz_items(items))
-    }
-
-    /// The VLRs between the header and the points.
-    fn vlr_list(&self) -> io::Result<Vec<Vlr>> {
-        let mut list = Vec::new();
-        let fields: Vec<&ExtraField> = self.extra_fields().collect();
-        if !fields.is_empty() {
-            let mut d = Vec::with_capacity(fields.len() * EXTRA_BYTES_DESCRIPTOR_LEN);
-            for f in fields {
-                // Extra Bytes descriptor (Table 24): reserved (2), data type,
-                // options 0 (no no-data/min/max/scale/offset), name (32),
-                // unused (4), no_data, min, max, scale, offset (5 × 24),
-                // description (32).
-                d.extend_from_slice(&[0, 0, f.data_type, 0]);
-                d.extend_from_slice(&fixed_str::<32>(f.name));
-                d.extend_from_slice(&[0u8; 4]);
-                d.extend_from_slice(&[0u8; 24 * 5]);
-                d.extend_from_slice(&fixed_str::<32>(f.description));
-            }
-            list.push(("LASF_Spec", 4, "extra bytes".to_string(), d));
-        }
-        if let Some(dig) = self.settings.waveform {
-            for i in 1..=WAVEFORM_DESCRIPTORS {
-                // Waveform Packet Descriptor (Table 17): bits per sample,
-                // compression type 0, number of samples, temporal sample
-                // spacing (ps), digitizer gain, digitizer offset
-                // (volts = offset + gain · sample).
-                let mut d = Vec::with_capacity(WAVE_DESCRIPTOR_LEN);
-                d.push(WAVEFORM_BITS);
-                d.push(0);
-                d.extend_from_slice(&((i * WAVEFORM_SAMPLES_STEP) as u32).to_le_bytes());
-                d.extend_from_slice(&dig.bin_ps.to_le_bytes());
-                d.extend_from_slice(&dig.gain.to_le_bytes());
-                d.extend_from_slice(&dig.offset.to_le_bytes());
-                debug_assert_eq!(d.len(), WAVE_DESCRIPTOR_LEN);
-                list.push((
-                    "LASF_Spec",
-                    99 + i as u16,
-                    format!("{} samples", i * WAVEFORM_SAMPLES_STEP),
-                    d,
-                ));
-            }
-        }
-        if let Some(wkt) = &self.settings.crs_wkt {
-            // OGC coordinate system WKT (section 2.5): a null-terminated
-            // string.
-            let mut d = wkt.as_bytes().to_vec();
-            d.push(0);
-            if d.len() > usize::from(u16::MAX) {
-                return Err(io::Error::new(
-                    io::ErrorKind::InvalidInput,
-                    "the CRS WKT is longer than a VLR can hold (65535 bytes)",
-                ));
-            }
-            list.push(("LASF_Projection", 2112, "OGC WKT".to_string(), d));
-        }
-        if self.settings.compressed {
-            let mut d = Vec::new();
-            self.laz_vlr()?.write_to(&mut d)?;
-            list.push(("laszip encoded", 22204, "lazrs".to_string(), d));
-        }
-        Ok(list)
-    }
-
-    /// The VLRs' bytes.
-    fn vlrs(&self) -> io::Result<Vec<u8>> {
-        let mut v = Vec::new();
-        for (user, id, description, data) in self.vlr_list()? {
-            // VLR header (Table 13): reserved, user ID, record ID, record
-            // length after header, description.
-            v.extend_from_slice(&0u16.to_le_bytes());
-            v.extend_from_slice(&fixed_str::<16>(user));
-            v.extend_from_slice(&id.to_le_bytes());
-            v.extend_from_slice(&(data.len() as u16).to_le_bytes());
-            v.extend_from_slice(&fixed_str::<32>(&description));
-            v.extend_from_slice(&data);
-        }
-        Ok(v)
-    }
-
     /// The 375-byte public header block (LAS 1.4 R15, Table 3).
     fn header(&self) -> Vec<u8> {
         let s = &self.settings;
-        let list = self.vlr_list().unwrap_or_default();
+        let list = self.settings.vlr_list().unwrap_or_default();
         let vlr_count = list.len() as u32;
         let vlr_bytes: usize = list
             .iter()
@@ -611,8 +616,8 @@ impl LasWriter {
         h.extend_from_slice(&(u32::from(HEADER_SIZE) + vlr_bytes as u32).to_le_bytes()); // offset to points
         h.extend_from_slice(&vlr_count.to_le_bytes());
         // Point data record format; bit 7 marks LASzip compression.
-        h.push(self.point_format() | if s.compressed { 0x80 } else { 0 });
-        h.extend_from_slice(&self.record_len().to_le_bytes());
+        h.push(self.settings.point_format() | if s.compressed { 0x80 } else { 0 });
+        h.extend_from_slice(&self.settings.record_len().to_le_bytes());
         // Legacy point counts: zero for point formats 6–10.
         h.extend_from_slice(&0u32.to_le_bytes());
         h.extend_from_slice(&[0u8; 20]);
@@ -681,7 +686,7 @@ impl LasWriter {
         // The buffer takes the points' records whole (an `extend` per field
         // costs a capacity check and a length update each).
         self.buf
-            .reserve(points.len() * usize::from(self.record_len()));
+            .reserve(points.len() * usize::from(self.settings.record_len()));
         for p in points {
             let xyz = [
                 self.quantize(p.position_m.x + o[0], 0)?,
@@ -991,7 +996,7 @@ mod tests {
             waveform_file_shared: false,
         };
         let mut w = LasWriter::create(&path, settings).unwrap();
-        let len = usize::from(w.record_len());
+        let len = usize::from(w.settings.record_len());
         // Blocks of 3 000 points, so that a few blocks fill a write.
         let per_block = 3000;
         let blocks = 2 * LAS_WRITE_BYTES / (per_block * len) + 2;

@@ -64,6 +64,11 @@ impl PlyWriter {
 }
 
 impl PlyWriter {
+    /// Length of a PLY file of `points` vertices.
+    pub fn file_len(points: u64) -> u64 {
+        header(0).len() as u64 + points * PLY_RECORD_LEN as u64
+    }
+
     /// Continues `path`, which an interrupted run finished early when it
     /// held `len` bytes: its header must be this writer's header for the
     /// vertices those bytes hold, and vertices are appended after them.

@@ -59,6 +59,11 @@ pub struct RunOptions<'a> {
     /// Write into a non-empty directory that no run wrote, replacing only
     /// the files a run writes ([`outdir::prepare_fresh`]).
     pub overwrite: bool,
+    /// Run even when the expected output does not fit the free space of
+    /// the output's file system or the expected memory is not available
+    /// ([`crate::budget`]); otherwise such a run is refused before it
+    /// starts.
+    pub no_space_check: bool,
     /// Stop (as if interrupted) once this many pulses were simulated in
     /// this call, rounded up to a whole block of 2048: long runs in slices.
     pub pulse_budget: Option<u64>,
@@ -76,6 +81,7 @@ impl<'a> RunOptions<'a> {
             stop: None,
             resume: false,
             overwrite: false,
+            no_space_check: false,
             pulse_budget: None,
             on_warning: None,
         }
@@ -285,6 +291,34 @@ fn run_with_scene(
         (None, Vec::new())
     };
 
+    // What the run will cost, refused before any work when it cannot fit.
+    let budget = crate::budget::estimate(survey, &scene, options.threads);
+    if !options.no_space_check {
+        let total: u64 = survey.lines.iter().map(|l| survey.pulses_of(l)).sum();
+        let share = prev.as_ref().map_or(1.0, |p| {
+            1.0 - p.counts().pulses as f64 / total.max(1) as f64
+        });
+        let short = budget.shortfalls(
+            out_dir,
+            crate::budget::free_bytes(out_dir),
+            crate::budget::available_memory(),
+            share,
+        );
+        if !short.is_empty() {
+            return Err(RunError {
+                path: out_dir.to_path_buf(),
+                source: io::Error::new(
+                    io::ErrorKind::StorageFull,
+                    format!(
+                        "{}; run fewer pulses, or pass --no-space-check (no_space_check) to \
+                         run anyway (for example when most pulses miss the scene)",
+                        short.join("; ")
+                    ),
+                ),
+            });
+        }
+    }
+
     let index_timer = Timer::start();
     let bvh = Bvh::build(scene);
     let index_time_s = index_timer.seconds();
@@ -365,6 +399,7 @@ fn run_with_scene(
         wall_time_s: wall_before + timer.seconds(),
         index_time_s,
         scene_primitives: bvh.scene().primitives.len(),
+        estimate: budget.clone(),
     };
 
     if let Some(next) = outcome.stopped_at {
@@ -499,7 +534,11 @@ pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
 /// (reproducible files) or today, echo attributes and error vector as extra
 /// bytes, the CRS; point format 6, uncompressed.
 pub fn las_settings(survey: &Survey, caster: &dyn RayCaster) -> LasSettings {
-    let b = caster.scene().bounds();
+    las_settings_for(survey, caster.scene().bounds())
+}
+
+/// [`las_settings`] for a scene with bounds `b`.
+pub fn las_settings_for(survey: &Survey, b: crate::geometry::Aabb) -> LasSettings {
     let origin = survey.output.offset_m;
     let c = origin
         + if b.is_empty() {

@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use super::resume::{NextPulse, ResumeState};
+use crate::budget::Budget;
 use crate::plan::Plan;
 use crate::sim::RunCounts;
 use crate::survey::Survey;
@@ -75,6 +76,8 @@ pub struct Summary {
     pub forest_trees: Vec<usize>,
     /// The expected figures per flight line.
     pub plan: Plan,
+    /// The expected points, file sizes and memory of the run.
+    pub estimate: Budget,
 }
 
 /// What a run measured, beside the survey and its plan.
@@ -89,6 +92,8 @@ pub struct Measured {
     pub index_time_s: f64,
     /// Primitives in the scene.
     pub scene_primitives: usize,
+    /// The expected cost of the run.
+    pub estimate: Budget,
 }
 
 impl Summary {
@@ -145,6 +150,7 @@ impl Summary {
             warnings,
             forest_trees: survey.forest_trees.clone(),
             plan,
+            estimate: m.estimate.clone(),
         }
     }
 }

@@ -152,9 +152,20 @@ pub fn describe_las_error(e: &las::Error) -> String {
 /// promises more points than the file holds is refused before any large
 /// allocation. Errors say what is wrong, without the path.
 pub fn open_las(path: &Path) -> Result<las::Reader, String> {
-    let size = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
+    let size = super::input::check_input(path, super::input::MAX_INPUT_BYTES)
+        .map_err(|e| e.to_string())?;
     let reader = las::Reader::from_path(path).map_err(|e| describe_las_error(&e))?;
     let header = reader.header();
+    let t = header.transforms();
+    for (axis, tr) in [("x", t.x), ("y", t.y), ("z", t.z)] {
+        if !(tr.scale.is_finite() && tr.scale != 0.0 && tr.offset.is_finite()) {
+            return Err(format!(
+                "the header's {axis} scale factor is {} and offset {}: coordinates are stored as \
+                 integers times a non-zero scale plus the offset (LAS 1.4 R15, Table 4)",
+                tr.scale, tr.offset
+            ));
+        }
+    }
     let count = header.number_of_points();
     let record = u64::from(header.point_format().len());
     let compressed = header.point_format().is_compressed
@@ -206,11 +217,19 @@ pub fn load_point_cloud(
                 not_finite += 1;
                 continue;
             }
-            let key = [
-                (q.x / v).floor() as i64,
-                (q.y / v).floor() as i64,
-                (q.z / v).floor() as i64,
-            ];
+            let cell = (q / v).floor();
+            // Beyond 2^52 cells the indices would no longer be exact.
+            if cell.abs().max_element() > 4.5e15 {
+                return Err(CloudError::Read {
+                    path: path.to_path_buf(),
+                    reason: format!(
+                        "the point at ({}, {}, {}) m is more than 2^52 voxels of {v} m from the \
+                         origin: use a larger voxel_m",
+                        q.x, q.y, q.z
+                    ),
+                });
+            }
+            let key = [cell.x as i64, cell.y as i64, cell.z as i64];
             cells.push((key, u8::from(p.classification)));
         }
     }

@@ -33,6 +33,30 @@ fn gltf_to_world(p: DVec3) -> DVec3 {
     DVec3::new(p.x, -p.z, p.y)
 }
 
+/// A URI's percent-escapes decoded (`%20` → space), as the glTF reader
+/// decodes buffer file names; malformed escapes are kept as they are.
+fn percent_decode(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = |b: u8| (b as char).to_digit(16);
+        if bytes[i] == b'%'
+            && let (Some(h), Some(l)) = (
+                bytes.get(i + 1).copied().and_then(hex),
+                bytes.get(i + 2).copied().and_then(hex),
+            )
+        {
+            out.push((h * 16 + l) as u8);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
 /// Loads a glTF 2.0 file into `scene` as triangles of a new object;
 /// returns (triangles added, degenerate triangles skipped).
 pub fn load_gltf(
@@ -45,10 +69,13 @@ pub fn load_gltf(
         path: path.to_path_buf(),
         reason,
     };
-    let bytes = std::fs::read(path).map_err(|source| MeshError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes =
+        super::input::read_input(path, super::input::MAX_INPUT_BYTES).map_err(|source| {
+            MeshError::Read {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
     let is_glb = path
         .extension()
         .and_then(|e| e.to_str())
@@ -68,6 +95,26 @@ pub fn load_gltf(
         other => fail(format!("not a valid glTF 2.0 file: {other}")),
     })?;
     drop(bytes);
+    // Buffers in files are checked before the glTF reader opens them: a
+    // regular file, within the size bound, at least as long as declared.
+    for buffer in document.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = buffer.source()
+            && !uri.starts_with("data:")
+        {
+            let file = path
+                .parent()
+                .unwrap_or(Path::new("."))
+                .join(percent_decode(uri));
+            let len = super::input::check_input(&file, super::input::MAX_INPUT_BYTES)
+                .map_err(|e| fail(format!("cannot load its buffer '{uri}': {e}")))?;
+            if len < buffer.length() as u64 {
+                return Err(fail(format!(
+                    "buffer '{uri}' has {len} bytes, fewer than the {} it declares",
+                    buffer.length()
+                )));
+            }
+        }
+    }
     let buffers = gltf::import_buffers(&document, path.parent(), blob)
         .map_err(|e| fail(format!("cannot load its buffers: {e}")))?;
     let Some(root) = document

@@ -11,6 +11,7 @@
 pub mod cloud;
 pub mod forest;
 mod gltf_mesh;
+pub mod input;
 mod obj;
 mod polygon;
 pub mod terrain;

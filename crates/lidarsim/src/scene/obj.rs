@@ -16,6 +16,7 @@
 //! matches no group or object of the file is an error (a typo would
 //! otherwise change nothing).
 
+use crate::geometry::MAX_COORDINATE_M;
 use std::collections::HashMap;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
@@ -256,7 +257,14 @@ fn parse_with_tobj(
     }
     let mut mtl_errors = Vec::new();
     for (line, lib) in &libraries {
-        if let Err(e) = tobj::load_mtl(base.join(lib)) {
+        if let Err(e) = super::input::check_input(&base.join(lib), super::input::MAX_INPUT_BYTES) {
+            mtl_errors.push(MeshError::MaterialLibrary {
+                path: path.to_path_buf(),
+                line: *line,
+                library: lib.clone(),
+                reason: e.to_string(),
+            });
+        } else if let Err(e) = tobj::load_mtl(base.join(lib)) {
             mtl_errors.push(MeshError::MaterialLibrary {
                 path: path.to_path_buf(),
                 line: *line,
@@ -377,7 +385,12 @@ fn plain_obj(text: &[u8]) -> Option<PlainObj> {
             None | Some("#") | Some("s") => {}
             Some("v") => {
                 for _ in 0..3 {
-                    positions.push(words.next()?.parse::<f64>().ok()?);
+                    let v = words.next()?.parse::<f64>().ok()?;
+                    // A bad coordinate is reported by the full parser's path.
+                    if v.is_nan() || v.abs() > MAX_COORDINATE_M {
+                        return None;
+                    }
+                    positions.push(v);
                 }
                 if words.next().is_some() {
                     return None;
@@ -413,6 +426,33 @@ fn plain_obj(text: &[u8]) -> Option<PlainObj> {
     Some(PlainObj { positions, groups })
 }
 
+/// The first vertex (`v x y z`) with a coordinate that is not a finite
+/// number within ±[`MAX_COORDINATE_M`]: its 1-based line and what is wrong
+/// (the OBJ parser would let it through and the faces using it would be
+/// dropped as degenerate without a word).
+fn bad_vertex(text: &[u8]) -> Option<(usize, String)> {
+    for (i, raw) in text.split(|&b| b == b'\n').enumerate() {
+        let line = String::from_utf8_lossy(raw);
+        let mut words = line.split_whitespace();
+        if words.next() != Some("v") {
+            continue;
+        }
+        for w in words.take(3) {
+            if let Ok(v) = w.parse::<f64>()
+                && (v.is_nan() || v.abs() > MAX_COORDINATE_M)
+            {
+                return Some((
+                    i + 1,
+                    format!(
+                        "vertex coordinate '{w}' is not a finite number within ±{MAX_COORDINATE_M:e} m"
+                    ),
+                ));
+            }
+        }
+    }
+    None
+}
+
 /// Loads an OBJ file into `scene` as triangles belonging to a new object.
 ///
 /// `survey_materials` are the survey's `[materials]`, which take precedence
@@ -424,9 +464,11 @@ pub fn load_obj(
     survey_materials: &HashMap<String, Material>,
     scene: &mut Scene,
 ) -> Result<(usize, usize), MeshError> {
-    let text = std::fs::read(path).map_err(|source| MeshError::Read {
-        path: path.to_path_buf(),
-        source,
+    let text = super::input::read_input(path, super::input::MAX_INPUT_BYTES).map_err(|source| {
+        MeshError::Read {
+            path: path.to_path_buf(),
+            source,
+        }
     })?;
     let base = path.parent().unwrap_or(Path::new("."));
     // Plain files (vertices, triangles, groups) take the fast reader; the
@@ -436,6 +478,12 @@ pub fn load_obj(
     let (groups, mtl_materials) = match &plain {
         Some(p) => (p.groups(), Vec::new()),
         None => {
+            if let Some((line, why)) = bad_vertex(&text) {
+                return Err(MeshError::Parse {
+                    path: path.to_path_buf(),
+                    reason: format!("line {line}: {why}"),
+                });
+            }
             parsed = parse_with_tobj(&text, path, base, survey_materials)?;
             (tobj_groups(&parsed.0), parsed.1.clone())
         }

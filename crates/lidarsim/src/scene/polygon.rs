@@ -52,6 +52,12 @@ pub struct Polygon {
 }
 
 impl Polygon {
+    /// Bytes the polygon owns besides itself (its vertex lists).
+    pub fn heap_bytes(&self) -> usize {
+        self.vertices.capacity() * std::mem::size_of::<DVec3>()
+            + self.projected.capacity() * std::mem::size_of::<[f64; 2]>()
+    }
+
     /// Builds the polygon from its vertices in order (either winding).
     ///
     /// The plane comes from all vertices by Newell's method (Newell, Newell &

@@ -40,6 +40,9 @@ use rayon::prelude::*;
 use super::{MaterialId, ObjectId, Primitive, Scene, Shape, SurfaceClass};
 use crate::geometry::{Aabb, DVec3, Ray};
 
+/// Largest height magnitude a terrain raster may hold, m (the deepest
+/// ocean trench is 11 km deep, the highest summit 8.8 km high).
+pub const MAX_HEIGHT_M: f64 = 100_000.0;
 /// Cells along each side of a [`TerrainTile`].
 pub const TILE_CELLS: u32 = 16;
 
@@ -476,6 +479,7 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
         path: path.to_path_buf(),
         source,
     };
+    super::input::check_input(path, super::input::MAX_INPUT_BYTES).map_err(read_err)?;
     let file = std::fs::File::open(path).map_err(read_err)?;
     let err = |line: usize, reason: String| TerrainError::Format {
         path: path.to_path_buf(),
@@ -503,7 +507,8 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
         let Some(key) = words.next() else {
             continue;
         };
-        if !key.starts_with(|c: char| c.is_ascii_alphabetic()) {
+        // A number (`nan` and `inf` included) starts the data.
+        if !key.starts_with(|c: char| c.is_ascii_alphabetic()) || key.parse::<f64>().is_ok() {
             first_data = Some((n, line));
             break;
         }
@@ -633,7 +638,18 @@ pub fn read_ascii_grid(path: &Path) -> Result<HeightGrid, TerrainError> {
                 .map_err(|_| err(n + 1, format!("'{word}' is not a number")))?;
             // File row r (0 = north) is grid row nrows-1-r.
             let (r, c) = (k / ncols, k % ncols);
-            if Some(v) != nodata && v.is_finite() {
+            if Some(v) != nodata && !v.is_nan() {
+                if v.is_infinite() || v.abs() > MAX_HEIGHT_M {
+                    return Err(err(
+                        n + 1,
+                        format!(
+                            "height '{word}' (row {}, column {}) is not a height within \
+                             ±{MAX_HEIGHT_M} m; mark missing cells with NODATA_value",
+                            r + 1,
+                            c + 1
+                        ),
+                    ));
+                }
                 heights[(nrows - 1 - r) * ncols + c] = v as f32;
             }
             k += 1;
@@ -672,10 +688,12 @@ pub fn read_geotiff(path: &Path) -> Result<HeightGrid, TerrainError> {
     use tiff::decoder::{Decoder, DecodingResult, Limits};
     use tiff::tags::Tag;
 
-    let file = std::fs::File::open(path).map_err(|source| TerrainError::Read {
+    let read_err = |source| TerrainError::Read {
         path: path.to_path_buf(),
         source,
-    })?;
+    };
+    super::input::check_input(path, super::input::MAX_INPUT_BYTES).map_err(read_err)?;
+    let file = std::fs::File::open(path).map_err(read_err)?;
     let err = |reason: String| TerrainError::Format {
         path: path.to_path_buf(),
         line: 0,
@@ -895,11 +913,26 @@ pub fn read_geotiff(path: &Path) -> Result<HeightGrid, TerrainError> {
             let base = src_row(row) * width;
             for (col, h) in out.iter_mut().enumerate() {
                 let v = value(base + src_col(col));
-                if v.is_finite() && Some(v) != nodata {
-                    *h = v as f32;
+                if !v.is_nan() && Some(v) != nodata {
+                    // Implausible heights stay as they are, to be reported.
+                    *h = if v.abs() <= MAX_HEIGHT_M {
+                        v as f32
+                    } else {
+                        f32::INFINITY
+                    };
                 }
             }
         });
+    if let Some(i) = heights.iter().position(|h| h.is_infinite()) {
+        let (row, col) = (i / width, i % width);
+        let v = value(src_row(row) * width + src_col(col));
+        return Err(err(format!(
+            "the pixel at row {}, column {} of the file holds {v:e}, not a height within \
+             ±{MAX_HEIGHT_M} m; mark missing pixels with the GDAL_NODATA tag or NaN",
+            src_row(row) + 1,
+            src_col(col) + 1
+        )));
+    }
     drop(image);
     let grid = HeightGrid {
         cols: width,

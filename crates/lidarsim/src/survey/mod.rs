@@ -24,11 +24,12 @@ use crate::navigation::{ErrorModel, LineErrors, NavigationErrors};
 use crate::platform::{Drift, FlightLine, Interpolation, Sway, SwayConfig, Track, plan_lines};
 use crate::scanner::{Mirror, MirrorProfile};
 use crate::scene::forest::{ForestSpec, generate};
+use crate::scene::input::edit_distance;
 use crate::scene::{
     Material, MeshPlacement, Polygon, Primitive, Scene, Shape, Species, SurfaceClass, TreeSpec,
     load_obj,
 };
-use crate::waveform::{PulseShape, ReceiverConfig};
+use crate::waveform::{PulseShape, ReceiverConfig, range_to_bin};
 
 /// Highest pulse repetition frequency accepted, Hz.
 pub const MAX_PRF_HZ: f64 = 1e7;
@@ -37,9 +38,44 @@ pub const MAX_PRF_HZ: f64 = 1e7;
 /// limit keeps pulse counts and per-line error series finite).
 pub const MAX_LINE_HOURS: f64 = 24.0;
 
-/// Largest coordinate magnitude accepted, m (beyond any projected
-/// coordinate system; the BVH keeps f32 boxes relative to the scene).
-pub const MAX_COORDINATE_M: f64 = 1e8;
+pub use crate::geometry::MAX_COORDINATE_M;
+
+/// Shortest emitted pulse accepted (FWHM), ns.
+pub const MIN_PULSE_FWHM_NS: f64 = 0.01;
+
+/// Most samples of the emitted pulse's shape at the receiver's bin: each
+/// sub-ray return is convolved with them.
+pub const MAX_PULSE_SAMPLES: usize = 4096;
+
+/// Most samples of a pulse's record from `min_range_m` to `max_range_m`
+/// (with f64 samples, 32 MiB per buffer and thread).
+pub const MAX_WINDOW_SAMPLES: usize = 1 << 22;
+
+/// Longest range accepted (`max_range_m`, `reference_range_m`), m.
+pub const MAX_RANGE_M: f64 = 100_000.0;
+
+/// Most attitude sway frequencies (each costs every pulse a sine).
+pub const MAX_SWAY_FREQUENCIES: usize = 32;
+
+/// Most vertices of a `[[polygon]]` and of an outline (`area_m`): larger
+/// shapes belong in a mesh file.
+pub const MAX_POLYGON_VERTICES: usize = 4096;
+
+/// Most flight lines a `[plan]` may generate.
+pub const MAX_PLAN_LINES: usize = 10_000;
+
+/// Largest species weight of a `[[forest]]` mix (weights are relative).
+pub const MAX_SPECIES_WEIGHT: f64 = 1e6;
+
+/// Most trees in a survey (`[[tree]]` entries and generated stands): each
+/// costs about 1 kB of scene and index.
+pub const MAX_TREES: f64 = 5e6;
+
+/// Largest GNSS position error of any kind (bias, noise, random walk), m.
+pub const MAX_GNSS_ERROR_M: f64 = 1000.0;
+
+/// Largest attitude or boresight error of any kind, degrees.
+pub const MAX_ATTITUDE_ERROR_DEG: f64 = 10.0;
 
 /// Seed used when the survey names none.
 pub const DEFAULT_SEED: u64 = 1;
@@ -108,17 +144,21 @@ impl fmt::Display for Diagnostic {
             }
         }
         if let Some(src) = &self.source_line {
-            let src = src.trim_end();
-            write!(f, "\n{gutter} |\n{} | {src}", self.line)?;
+            // A long line is shown as a window around the column, so that
+            // a 20 MB value is not echoed whole.
+            let src: Vec<char> = src.trim_end().chars().collect();
+            let col = self.column.max(1) - 1;
+            let from = col.saturating_sub(SHOWN_BEFORE);
+            let to = (col + SHOWN_AFTER).min(src.len());
+            let lead = if from > 0 { "…" } else { "" };
+            let tail = if to < src.len() { "…" } else { "" };
+            let text: String = src[from.min(to)..to].iter().collect();
+            write!(f, "\n{gutter} |\n{} | {lead}{text}{tail}", self.line)?;
             if self.column > 0 {
-                let shown = src.chars().count();
-                let width = self.width.min(shown.saturating_sub(self.column - 1)).max(1);
-                write!(
-                    f,
-                    "\n{gutter} | {}{}",
-                    " ".repeat(self.column - 1),
-                    "^".repeat(width)
-                )?;
+                let shown = to - from.min(to);
+                let at = col - from + lead.chars().count();
+                let width = self.width.min(shown.saturating_sub(col - from)).max(1);
+                write!(f, "\n{gutter} | {}{}", " ".repeat(at), "^".repeat(width))?;
             }
         }
         if let Some(help) = &self.help {
@@ -127,6 +167,11 @@ impl fmt::Display for Diagnostic {
         Ok(())
     }
 }
+
+/// Characters of a source line shown before the column of a problem.
+const SHOWN_BEFORE: usize = 60;
+/// Characters of a source line shown from the column of a problem on.
+const SHOWN_AFTER: usize = 100;
 
 /// A survey that could not be loaded: one or more diagnostics.
 #[derive(Clone, Debug, PartialEq)]
@@ -345,20 +390,15 @@ fn remove_key(table: &mut toml::Table, path: &KeyPath) -> Option<KeyPath> {
     Some(KeyPath(path.0[..=last].to_vec()))
 }
 
-/// Levenshtein distance between two short strings.
-fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
-            prev = cur;
-        }
+/// A number as messages show it: plainly for ordinary magnitudes, in
+/// exponent form for very large or small ones (`1e300`, not 301 digits).
+pub fn num(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
     }
-    row[b.len()]
 }
 
 /// Collects problems with their key paths during validation.
@@ -386,13 +426,14 @@ impl Checker {
         let v = value.unwrap_or(default);
         let below = if lo_open { v <= lo } else { v < lo };
         if !v.is_finite() || below || v > hi {
+            let (lo, hi_s) = (num(lo), num(hi));
             let range = match (lo_open, hi.is_finite()) {
                 (true, false) => format!("must be greater than {lo}{unit}"),
                 (false, false) => format!("must be at least {lo}{unit}"),
-                (true, true) => format!("must be greater than {lo} and at most {hi}{unit}"),
-                (false, true) => format!("must be between {lo} and {hi}{unit}"),
+                (true, true) => format!("must be greater than {lo} and at most {hi_s}{unit}"),
+                (false, true) => format!("must be between {lo} and {hi_s}{unit}"),
             };
-            self.err(path, format!("{range}, got {v}"));
+            self.err(path, format!("{range}, got {}", num(v)));
             return default;
         }
         v
@@ -458,13 +499,13 @@ impl Checker {
 }
 
 /// Reads the axis values of `sigma_*` / `random_walk_*`: one number for all
-/// three axes or a list of three.
+/// three axes or a list of three, each from 0 to `max` (in the key's unit).
 fn axes(
     c: &mut Checker,
     path: KeyPath,
     v: &Option<raw::NumberOrList>,
     default: [f64; 3],
-    scale: f64,
+    (scale, max, unit): (f64, f64, &str),
 ) -> [f64; 3] {
     let vals = match v {
         None => return default,
@@ -478,22 +519,48 @@ fn axes(
             return default;
         }
     };
-    if vals.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
-        c.err(path, "must be at least 0");
+    if vals.iter().any(|x| !(*x >= 0.0 && *x <= max)) {
+        let worst = vals.iter().copied().fold(0.0, |a: f64, x| {
+            if x.is_nan() || x.abs() > a.abs() {
+                x
+            } else {
+                a
+            }
+        });
+        c.err(
+            path,
+            format!(
+                "must be between 0 and {}{unit}, got {}",
+                num(max),
+                num(worst)
+            ),
+        );
         return default;
     }
     vals.map(|x| x * scale)
 }
 
-/// Reads a `[x, y, z]` or `[roll, pitch, yaw]` list.
-fn triple(c: &mut Checker, path: KeyPath, v: &Option<Vec<f64>>, scale: f64) -> [f64; 3] {
+/// Reads a `[x, y, z]` or `[roll, pitch, yaw]` list, each at most `max` in
+/// magnitude (in the key's unit).
+fn triple(
+    c: &mut Checker,
+    path: KeyPath,
+    v: &Option<Vec<f64>>,
+    (scale, max, unit): (f64, f64, &str),
+) -> [f64; 3] {
     match v {
         None => [0.0; 3],
-        Some(l) if l.len() == 3 && l.iter().all(|x| x.is_finite()) => {
+        Some(l) if l.len() == 3 && l.iter().all(|x| x.abs() <= max) => {
             [l[0] * scale, l[1] * scale, l[2] * scale]
         }
         Some(_) => {
-            c.err(path, "must be a list of 3 finite numbers");
+            c.err(
+                path,
+                format!(
+                    "must be a list of 3 numbers from -{0} to {0}{unit}",
+                    num(max)
+                ),
+            );
             [0.0; 3]
         }
     }
@@ -532,10 +599,23 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
         };
         // [gnss] takes metres, [imu] degrees: the other unit's keys exist in
         // the shared raw table but are errors here.
-        let (bias, sigma, walk, scale) = if gnss {
-            (&r.bias_m, &r.sigma_m, &r.random_walk_m, 1.0)
+        // Bounds far beyond any navigation grade (a consumer GNSS errs by
+        // metres, an IMU by fractions of a degree) that keep positions and
+        // angles meaningful.
+        let (bias, sigma, walk, unit) = if gnss {
+            (
+                &r.bias_m,
+                &r.sigma_m,
+                &r.random_walk_m,
+                (1.0, MAX_GNSS_ERROR_M, " m"),
+            )
         } else {
-            (&r.bias_deg, &r.sigma_deg, &r.random_walk_deg, deg)
+            (
+                &r.bias_deg,
+                &r.sigma_deg,
+                &r.random_walk_deg,
+                (deg, MAX_ATTITUDE_ERROR_DEG, "°"),
+            )
         };
         let other_unit = if gnss {
             [
@@ -561,18 +641,18 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
         let suffix = if gnss { "_m" } else { "_deg" };
         let mut m = base;
         if bias.is_some() {
-            m.bias = triple(c, p.key(&format!("bias{suffix}")), bias, scale);
+            m.bias = triple(c, p.key(&format!("bias{suffix}")), bias, unit);
         }
-        m.sigma = axes(c, p.key(&format!("sigma{suffix}")), sigma, m.sigma, scale);
+        m.sigma = axes(c, p.key(&format!("sigma{suffix}")), sigma, m.sigma, unit);
         m.random_walk = axes(
             c,
             p.key(&format!("random_walk{suffix}")),
             walk,
             m.random_walk,
-            scale,
+            unit,
         );
         if r.correlation_time_s.is_some() || m.correlation_time_s <= 0.0 {
-            m.correlation_time_s = c.positive(
+            m.correlation_time_s = c.number(
                 p.key("correlation_time_s"),
                 r.correlation_time_s,
                 if m.correlation_time_s > 0.0 {
@@ -580,6 +660,9 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
                 } else {
                     100.0
                 },
+                0.0,
+                true,
+                1e6,
                 " s",
             );
         }
@@ -593,9 +676,19 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
     NavigationErrors {
         gnss,
         imu,
-        boresight_rad: triple(c, bp.key("angles_deg"), &raw.boresight.angles_deg, deg),
+        boresight_rad: triple(
+            c,
+            bp.key("angles_deg"),
+            &raw.boresight.angles_deg,
+            (deg, MAX_ATTITUDE_ERROR_DEG, "°"),
+        ),
         lever_arm_m: {
-            let [x, y, z] = triple(c, bp.key("lever_arm_m"), &raw.boresight.lever_arm_m, 1.0);
+            let [x, y, z] = triple(
+                c,
+                bp.key("lever_arm_m"),
+                &raw.boresight.lever_arm_m,
+                (1.0, 100.0, " m"),
+            );
             DVec3::new(x, y, z)
         },
         range_sigma_m: c.number(
@@ -617,6 +710,87 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
             "°",
         ) * deg,
     }
+}
+
+/// What makes `points` unusable as the outline of an area, if anything:
+/// no enclosed area (fewer than three distinct points, or all on a line),
+/// or edges that cross or touch each other other than at their shared
+/// corners (a bow tie encloses two areas of opposite sense, which cancel).
+fn outline_problem(points: &[[f64; 2]]) -> Option<String> {
+    let n = points.len();
+    let twice_area: f64 = (0..n)
+        .map(|i| {
+            let (a, b) = (points[i], points[(i + 1) % n]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum();
+    let (lo, hi) = points.iter().fold(
+        ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]),
+        |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1])],
+                [hi[0].max(p[0]), hi[1].max(p[1])],
+            )
+        },
+    );
+    // Orientation of c relative to the line a→b.
+    let orient = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        let v = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+        if v > 0.0 {
+            1
+        } else if v < 0.0 {
+            -1
+        } else {
+            0
+        }
+    };
+    let on_segment = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        c[0] >= a[0].min(b[0])
+            && c[0] <= a[0].max(b[0])
+            && c[1] >= a[1].min(b[1])
+            && c[1] <= a[1].max(b[1])
+    };
+    for i in 0..n {
+        let (a, b) = (points[i], points[(i + 1) % n]);
+        // Edges sharing a corner with edge i are its neighbours.
+        for j in i + 2..n {
+            if i == 0 && j == n - 1 {
+                continue;
+            }
+            let (c, d) = (points[j], points[(j + 1) % n]);
+            let (o1, o2, o3, o4) = (
+                orient(a, b, c),
+                orient(a, b, d),
+                orient(c, d, a),
+                orient(c, d, b),
+            );
+            let crosses = (o1 != o2 && o3 != o4)
+                || (o1 == 0 && on_segment(a, b, c))
+                || (o2 == 0 && on_segment(a, b, d))
+                || (o3 == 0 && on_segment(c, d, a))
+                || (o4 == 0 && on_segment(c, d, b));
+            if crosses {
+                return Some(format!(
+                    "crosses itself: the edge from point {} to point {} meets the edge from \
+                     point {} to point {} (points counted from 1); give the corners of the area \
+                     in order around it",
+                    i + 1,
+                    (i + 1) % n + 1,
+                    j + 1,
+                    (j + 1) % n + 1
+                ));
+            }
+        }
+    }
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    if twice_area.is_nan() || twice_area.abs() <= 1e-9 * extent * extent {
+        return Some(
+            "encloses no area: its points lie on one line (or repeat); give the corners of \
+             the area in order"
+                .into(),
+        );
+    }
+    None
 }
 
 /// An outline in plan, from exactly one of `rectangle_m = [x_min, y_min,
@@ -642,16 +816,28 @@ fn outline(
         }
         (None, Some(a)) => {
             if a.len() < 3
-                || a.iter()
-                    .any(|p| p.len() != 2 || p.iter().any(|v| !v.is_finite()))
+                || a.len() > MAX_POLYGON_VERTICES
+                || a.iter().any(|p| {
+                    p.len() != 2 || p.iter().any(|v| v.is_nan() || v.abs() > MAX_COORDINATE_M)
+                })
             {
                 c.err(
                     path.key("area_m"),
-                    "must be a list of at least 3 [x, y] points (the outline)",
+                    format!(
+                        "must be a list of 3 to {MAX_POLYGON_VERTICES} [x, y] points (the \
+                         outline) within ±{} m",
+                        num(MAX_COORDINATE_M)
+                    ),
                 );
-                None
-            } else {
-                Some(a.iter().map(|p| [p[0], p[1]]).collect())
+                return None;
+            }
+            let points: Vec<[f64; 2]> = a.iter().map(|p| [p[0], p[1]]).collect();
+            match outline_problem(&points) {
+                Some(why) => {
+                    c.err(path.key("area_m"), why);
+                    None
+                }
+                None => Some(points),
             }
         }
         (Some(_), Some(_)) => {
@@ -730,6 +916,24 @@ fn check_plan(
         );
         return Vec::new();
     }
+    let lines = crate::platform::plan_line_count(&area, -heading.to_radians(), spacing);
+    if lines > MAX_PLAN_LINES as f64 {
+        let key = if plan.line_spacing_m.is_some() {
+            pp.key("line_spacing_m")
+        } else {
+            pp.key("side_overlap")
+        };
+        c.err(
+            key,
+            format!(
+                "lines {} m apart would make {} flight lines over the area; a plan may make at \
+                 most {MAX_PLAN_LINES}",
+                num(spacing),
+                num(lines)
+            ),
+        );
+        return Vec::new();
+    }
     // Flying height above the ground at the area's centre.
     let n = area.len() as f64;
     let (cx, cy) = (
@@ -765,8 +969,17 @@ pub fn read_trajectory(
     path: &Path,
     interpolation: Interpolation,
 ) -> Result<Vec<(f64, Track)>, String> {
-    let text = std::fs::read_to_string(path)
+    let bytes = crate::scene::input::read_input(path, crate::scene::input::MAX_TRAJECTORY_BYTES)
         .map_err(|e| format!("cannot read trajectory file '{}': {e}", path.display()))?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        format!(
+            "'{}' line {line}: not valid UTF-8 (byte {}): a trajectory is a CSV text file",
+            path.display(),
+            at + 1
+        )
+    })?;
     let mut rows = text
         .lines()
         .enumerate()
@@ -813,6 +1026,17 @@ pub fn read_trajectory(
     let mut segments: Vec<(String, Vec<TrackSample>)> = Vec::new();
     for (n, row) in rows {
         let cells: Vec<&str> = row.split(',').map(str::trim).collect();
+        if cells.len() != names.len() {
+            return Err(format!(
+                "'{}' line {}: {} values for the header's {} columns ({}); every row needs one \
+                 value per column",
+                path.display(),
+                n + 1,
+                cells.len(),
+                names.len(),
+                names.join(", ")
+            ));
+        }
         let value = |k: usize| -> Result<f64, String> {
             let cell = cells.get(idx[k]).copied().unwrap_or("");
             cell.parse::<f64>()
@@ -828,6 +1052,25 @@ pub fn read_trajectory(
                 })
         };
         let v: Vec<f64> = (0..7).map(value).collect::<Result<_, _>>()?;
+        if let Some(k) = (1..4).find(|&k| v[k].abs() > MAX_COORDINATE_M) {
+            return Err(format!(
+                "'{}' line {}: `{}` is {}, beyond ±{} m",
+                path.display(),
+                n + 1,
+                wanted[k],
+                num(v[k]),
+                num(MAX_COORDINATE_M)
+            ));
+        }
+        if let Some(k) = (4..7).find(|&k| v[k].abs() > 360.0) {
+            return Err(format!(
+                "'{}' line {}: `{}` is {}°, beyond ±360°",
+                path.display(),
+                n + 1,
+                wanted[k],
+                num(v[k])
+            ));
+        }
         // Line values compare as numbers when they are numbers ("0" = "0.0").
         let key = line_col
             .and_then(|i| cells.get(i))
@@ -1045,10 +1288,15 @@ fn check_forest(
             let mut mix = Vec::new();
             for (name, w) in m {
                 match Species::from_name(name) {
-                    Some(s) if w.is_finite() && *w > 0.0 => mix.push((s, *w)),
+                    Some(s) if *w > 0.0 && *w <= MAX_SPECIES_WEIGHT => mix.push((s, *w)),
                     Some(_) => c.err(
                         fp.key("species").key(name),
-                        format!("weight must be greater than 0, got {w}"),
+                        format!(
+                            "weight must be greater than 0 and at most {} (weights are relative \
+                             shares), got {}",
+                            num(MAX_SPECIES_WEIGHT),
+                            num(*w)
+                        ),
                     ),
                     None => c.err(
                         fp.key("species").key(name),
@@ -1275,13 +1523,14 @@ impl Survey {
     /// generated forests and sway follow the new seed too.
     pub fn load_with_seed(path: &Path, seed: Option<u64>) -> Result<Self, SurveyError> {
         let file = path.display().to_string();
-        let text = std::fs::read(path).map_err(|e| SurveyError {
-            diagnostics: vec![Diagnostic::file_level(
-                &file,
-                0,
-                format!("cannot read the survey file: {e}"),
-            )],
-        })?;
+        let text = crate::scene::input::read_input(path, crate::scene::input::MAX_SURVEY_BYTES)
+            .map_err(|e| SurveyError {
+                diagnostics: vec![Diagnostic::file_level(
+                    &file,
+                    0,
+                    format!("cannot read the survey file: {e}"),
+                )],
+            })?;
         let text = String::from_utf8(text).map_err(|e| {
             let offset = e.utf8_error().valid_up_to();
             let prefix = String::from_utf8_lossy(&e.as_bytes()[..offset]).into_owned();
@@ -1420,6 +1669,17 @@ impl Survey {
             50.0,
             " Hz",
         );
+        if scan_frequency_hz > prf_hz / 4.0 {
+            c.err(
+                sp.key("scan_frequency_hz"),
+                format!(
+                    "must be at most prf_hz / 4 = {} Hz, got {}: the mirror would sweep its \
+                     scan line with fewer than two pulses",
+                    num(prf_hz / 4.0),
+                    num(scan_frequency_hz)
+                ),
+            );
+        }
         let scan_angle_given = match s.scan_angle_deg {
             Some(a) if a >= 90.0 => {
                 c.err(
@@ -1463,15 +1723,39 @@ impl Survey {
             " mrad",
         );
         let subrays = c.count(sp.key("subrays"), s.subrays, 19, 1, 10_000) as usize;
-        let pulse_fwhm_ns = c.number(
-            sp.key("pulse_fwhm_ns"),
-            s.pulse_fwhm_ns,
-            4.0,
-            0.0,
-            true,
-            1000.0,
-            " ns",
-        );
+        let pulse_fwhm_ns = match s.pulse_fwhm_ns {
+            Some(v) if v > 0.0 && v < MIN_PULSE_FWHM_NS => {
+                let hint = if v < 1e-6 {
+                    format!(
+                        ": the key is in nanoseconds and {} looks like seconds ({} ns)",
+                        num(v),
+                        num(v * 1e9)
+                    )
+                } else {
+                    String::new()
+                };
+                c.err(
+                    sp.key("pulse_fwhm_ns"),
+                    format!(
+                        "must be at least {MIN_PULSE_FWHM_NS} ns (airborne pulses last 1 to 10 \
+                         ns), got {}{hint}",
+                        num(v)
+                    ),
+                );
+                None
+            }
+            other => Some(c.number(
+                sp.key("pulse_fwhm_ns"),
+                other,
+                4.0,
+                0.0,
+                true,
+                1000.0,
+                " ns",
+            )),
+        };
+        let pulse_ok = pulse_fwhm_ns.is_some();
+        let pulse_fwhm_ns = pulse_fwhm_ns.unwrap_or(4.0);
         let pulse = match s.pulse_shape.as_deref() {
             None | Some("gaussian") => PulseShape::Gaussian {
                 fwhm_s: pulse_fwhm_ns * 1e-9,
@@ -1501,17 +1785,28 @@ impl Survey {
             f64::INFINITY,
             " m",
         );
-        let max_range_m = c.positive(sp.key("max_range_m"), s.max_range_m, 10_000.0, " m");
+        let max_range_m = c.number(
+            sp.key("max_range_m"),
+            s.max_range_m,
+            10_000.0,
+            0.0,
+            true,
+            MAX_RANGE_M,
+            " m",
+        );
         if max_range_m <= min_range_m {
             c.err(
                 sp.key("max_range_m"),
                 format!("must be greater than min_range_m ({min_range_m} m)"),
             );
         }
-        let reference_range_m = c.positive(
+        let reference_range_m = c.number(
             sp.key("reference_range_m"),
             s.reference_range_m,
             1000.0,
+            1.0,
+            false,
+            MAX_RANGE_M,
             " m",
         );
         let wavelength_nm = c.positive(sp.key("wavelength_nm"), s.wavelength_nm, 1064.0, " nm");
@@ -1520,28 +1815,63 @@ impl Survey {
         let r = &raw.receiver;
         let rp = root.key("receiver");
         let bin_ps = c.number(rp.key("bin_ps"), r.bin_ps, 500.0, 0.0, true, 1e6, " ps");
-        let noise = c.number(rp.key("noise"), r.noise, 0.0, 0.0, false, f64::INFINITY, "");
-        let atmosphere = c.number(
-            rp.key("atmosphere"),
-            r.atmosphere,
-            0.0,
-            0.0,
-            false,
-            f64::INFINITY,
-            "",
-        );
+        // Amplitudes are in units of the echo of a white plane filling the
+        // beam at the reference range: a noise or path radiance above it
+        // would hide every echo.
+        let noise = c.number(rp.key("noise"), r.noise, 0.0, 0.0, false, 1.0, "");
+        let atmosphere = c.number(rp.key("atmosphere"), r.atmosphere, 0.0, 0.0, false, 1.0, "");
         let speckle_looks = c.positive(rp.key("speckle_looks"), r.speckle_looks, 1.0, "");
         let threshold_sigma = c.positive(rp.key("threshold_sigma"), r.threshold_sigma, 4.0, "");
         let min_amplitude = c.positive(rp.key("min_amplitude"), r.min_amplitude, 0.005, "");
         let intensity_gain = c.positive(rp.key("intensity_gain"), r.intensity_gain, 10_000.0, "");
-        if bin_ps * 1e-3 > pulse_fwhm_ns {
+        if pulse_ok && bin_ps * 1e-3 > pulse_fwhm_ns {
             c.err(
                 rp.key("bin_ps"),
                 format!(
-                    "a {bin_ps} ps bin cannot sample a {pulse_fwhm_ns} ns pulse; use a bin at \
-                     most the pulse width"
+                    "a {} ps bin cannot sample a {} ns pulse; use a bin at most the pulse width",
+                    num(bin_ps),
+                    num(pulse_fwhm_ns)
                 ),
             );
+        }
+        // The work of a pulse grows with the samples of the pulse shape
+        // (each return is convolved with it) and its memory with the
+        // samples of the range window.
+        if pulse_ok {
+            let (before, after) = pulse.support_s();
+            let shape_samples = (before + after) / (bin_ps * 1e-12);
+            let window_samples =
+                range_to_bin(max_range_m - min_range_m, bin_ps * 1e-12) + shape_samples;
+            let finest = ((before + after) / MAX_PULSE_SAMPLES as f64 * 1e12)
+                .max(range_to_bin(max_range_m - min_range_m, 1e-12) / MAX_WINDOW_SAMPLES as f64);
+            if shape_samples > MAX_PULSE_SAMPLES as f64 {
+                c.err(
+                    rp.key("bin_ps"),
+                    format!(
+                        "a {} ps bin samples the {} ns pulse (its shape spans {:.1} ns) with {} \
+                         samples; at most {MAX_PULSE_SAMPLES}: use bin_ps of at least {:.2} ps",
+                        num(bin_ps),
+                        num(pulse_fwhm_ns),
+                        (before + after) * 1e9,
+                        num(shape_samples.round()),
+                        finest
+                    ),
+                );
+            } else if window_samples > MAX_WINDOW_SAMPLES as f64 {
+                c.err(
+                    rp.key("bin_ps"),
+                    format!(
+                        "a {} ps bin needs {} samples for the range window from \
+                         scanner.min_range_m to scanner.max_range_m ({} m); at most \
+                         {MAX_WINDOW_SAMPLES}: use bin_ps of at least {:.2} ps or narrow the \
+                         range window",
+                        num(bin_ps),
+                        num(window_samples.round()),
+                        num(max_range_m - min_range_m),
+                        finest
+                    ),
+                );
+            }
         }
 
         // [platform]
@@ -1578,10 +1908,20 @@ impl Survey {
         );
         let freqs = match &p.sway_frequencies_hz {
             None => d.frequencies_hz.clone(),
-            Some(f) if f.is_empty() || f.iter().any(|x| !(x.is_finite() && *x > 0.0)) => {
+            Some(f)
+                if f.is_empty()
+                    || f.len() > MAX_SWAY_FREQUENCIES
+                    || f.iter()
+                        .any(|x| !(x.is_finite() && *x > 0.0 && *x <= 100.0)) =>
+            {
                 c.err(
                     pp.key("sway_frequencies_hz"),
-                    "must be a non-empty list of frequencies greater than 0 Hz",
+                    format!(
+                        "must be a list of 1 to {MAX_SWAY_FREQUENCIES} frequencies greater than 0 \
+                         and at most 100 Hz (an aircraft sways at a few tenths of a hertz), got {} \
+                         entries",
+                        f.len()
+                    ),
                 );
                 d.frequencies_hz.clone()
             }
@@ -1763,10 +2103,15 @@ impl Survey {
                 );
             }
         }
-        let trajectory_interval_s = c.positive(
+        // Inertial systems record at 50 to 2000 Hz; finer rows add bytes,
+        // not information.
+        let trajectory_interval_s = c.number(
             op.key("trajectory_interval_s"),
             o.trajectory_interval_s,
             0.001,
+            1e-4,
+            false,
+            3600.0,
             " s",
         );
         let gps_start_time_s = o.gps_start_time_s.map(|g| {
@@ -1844,10 +2189,13 @@ impl Survey {
             }
         };
 
-        // Scene: polygons, then meshes.
+        // Scene: polygons, then meshes. `owners` says which entry added
+        // which primitives (from its first on), to name it in messages.
         let mut scene = Scene::default();
+        let mut owners: Vec<(KeyPath, usize)> = Vec::new();
         for (i, poly) in raw.polygons.iter().enumerate() {
             let pp = root.key("polygon").index(i);
+            owners.push((pp.key("vertices_m"), scene.primitives.len()));
             let class = c.class(pp.key("class"), &poly.class);
             let material = match &poly.material {
                 None => {
@@ -1873,6 +2221,17 @@ impl Survey {
                     c.err(
                         pp.key("vertices_m"),
                         "is required: a list of [x, y, z] points",
+                    );
+                    None
+                }
+                Some(vs) if vs.len() > MAX_POLYGON_VERTICES => {
+                    c.err(
+                        pp.key("vertices_m"),
+                        format!(
+                            "has {} vertices; a polygon may have at most {MAX_POLYGON_VERTICES}: \
+                             give detailed shapes as a mesh ([[mesh]], OBJ or glTF)",
+                            vs.len()
+                        ),
                     );
                     None
                 }
@@ -1909,6 +2268,7 @@ impl Survey {
             .unwrap_or_default();
         for (i, mesh) in raw.meshes.iter().enumerate() {
             let mp = root.key("mesh").index(i);
+            owners.push((mp.key("offset_m"), scene.primitives.len()));
             let class = c.class(mp.key("class"), &mesh.class);
             let offset = match &mesh.offset_m {
                 None => Some(DVec3::ZERO),
@@ -1984,15 +2344,25 @@ impl Survey {
         }
         for (i, t) in raw.terrains.iter().enumerate() {
             let tp = root.key("terrain").index(i);
+            owners.push((tp.clone(), scene.primitives.len()));
             check_terrain(&mut c, &tp, t, &materials, &base, seed, i, &mut scene);
         }
         for (i, pc) in raw.point_clouds.iter().enumerate() {
             let pp = root.key("point_cloud").index(i);
+            owners.push((pp.key("offset_m"), scene.primitives.len()));
             let class = pc
                 .class
                 .as_ref()
                 .map(|_| c.class(pp.key("class"), &pc.class));
-            let voxel_m = c.number(pp.key("voxel_m"), pc.voxel_m, 0.5, 0.0, true, 1000.0, " m");
+            let voxel_m = c.number(
+                pp.key("voxel_m"),
+                pc.voxel_m,
+                0.5,
+                0.01,
+                false,
+                1000.0,
+                " m",
+            );
             let offset = match &pc.offset_m {
                 None => Some(DVec3::ZERO),
                 some => c.point(pp.key("offset_m"), some),
@@ -2039,7 +2409,7 @@ impl Survey {
         let v = &raw.vegetation;
         let vp = root.key("vegetation");
         let canopy = CanopyConfig {
-            step_m: c.number(vp.key("step_m"), v.step_m, 0.3, 0.0, true, 10.0, " m"),
+            step_m: c.number(vp.key("step_m"), v.step_m, 0.3, 0.01, false, 10.0, " m"),
             partial_blocking: c.number(
                 vp.key("partial_blocking"),
                 v.partial_blocking,
@@ -2061,6 +2431,7 @@ impl Survey {
         );
         for (i, t) in raw.trees.iter().enumerate() {
             let tp = root.key("tree").index(i);
+            owners.push((tp.key("position_m"), scene.primitives.len()));
             if let Some(tree) = check_tree(&mut c, &tp, t, seed, i) {
                 scene.add_tree(&tree, whorl, format!("tree[{i}]"));
             }
@@ -2074,12 +2445,32 @@ impl Survey {
             let ground_z = |x: f64, y: f64| {
                 crate::plan::ground_below(&ground, DVec3::new(x, y, 1e6)).max(-1e5)
             };
+            let mut planned = raw.trees.len() as f64;
             for (i, f) in raw.forests.iter().enumerate() {
                 let fp = root.key("forest").index(i);
                 let Some(spec) = check_forest(&mut c, &fp, f, seed, i) else {
                     forest_trees.push(0);
                     continue;
                 };
+                let stand =
+                    crate::scene::forest::polygon_area(&spec.area) / 10_000.0 * spec.stems_per_ha;
+                planned += stand;
+                if planned > MAX_TREES {
+                    c.err(
+                        fp.key("stems_per_ha"),
+                        format!(
+                            "the stand would hold {} trees ({} ha at {} stems/ha), {} in the \
+                             survey; a survey may hold at most {} trees",
+                            num(stand.round()),
+                            num(crate::scene::forest::polygon_area(&spec.area) / 10_000.0),
+                            num(spec.stems_per_ha),
+                            num(planned.round()),
+                            num(MAX_TREES)
+                        ),
+                    );
+                    forest_trees.push(0);
+                    continue;
+                }
                 let trees = generate(&spec, &ground_z);
                 let wanted = (crate::scene::forest::polygon_area(&spec.area) / 10_000.0
                     * spec.stems_per_ha)
@@ -2094,6 +2485,7 @@ impl Survey {
                     ));
                 }
                 forest_trees.push(trees.len());
+                owners.push((fp.clone(), scene.primitives.len()));
                 for (j, tree) in trees.iter().enumerate() {
                     scene.add_tree(tree, whorl, format!("forest[{i}].tree[{j}]"));
                 }
@@ -2238,27 +2630,64 @@ impl Survey {
         if !bounds.is_empty() {
             let far = bounds.min.abs().max(bounds.max.abs()).max_element();
             if far > MAX_COORDINATE_M {
-                let key = raw
-                    .polygons
-                    .iter()
-                    .position(|p| {
-                        p.vertices_m
-                            .iter()
-                            .flatten()
-                            .flatten()
-                            .any(|x| x.abs() > MAX_COORDINATE_M)
+                // The first entry whose primitives reach that far.
+                let reach = |range: std::ops::Range<usize>| {
+                    scene.primitives[range].iter().fold(0.0f64, |m, p| {
+                        let b = p.bounds();
+                        m.max(b.min.abs().max(b.max.abs()).max_element())
                     })
-                    .map_or_else(KeyPath::root, |i| {
-                        root.key("polygon").index(i).key("vertices_m")
-                    });
+                };
+                let key = owners
+                    .iter()
+                    .enumerate()
+                    .find(|(k, (_, from))| {
+                        let to = owners
+                            .get(k + 1)
+                            .map_or(scene.primitives.len(), |(_, t)| *t);
+                        reach(*from..to) > MAX_COORDINATE_M
+                    })
+                    .map_or_else(KeyPath::root, |(_, (key, _))| key.clone());
                 c.err(
                     key,
                     format!(
-                        "the scene reaches {far:e} m from the origin: coordinates must lie \
-                         within ±{MAX_COORDINATE_M:e} m (shift them, e.g. by a mesh's \
-                         offset_m)"
+                        "this part of the scene reaches {} m from the origin: coordinates must \
+                         lie within ±{MAX_COORDINATE_M:e} m (shift them, e.g. by a mesh's offset_m)",
+                        num(far)
                     ),
                 );
+            }
+        }
+        // LAS stores coordinates as 32-bit integers of the scale: every
+        // point must fit, receiver noise anywhere within range included.
+        if formats.las || formats.laz {
+            let mut reach = if bounds.is_empty() {
+                crate::geometry::Aabb::EMPTY
+            } else {
+                bounds
+            };
+            for l in &lines {
+                for p in [l.start_m, l.end_m] {
+                    let r = DVec3::splat(max_range_m);
+                    reach = reach.union_point(p - r).union_point(p + r);
+                }
+            }
+            if !reach.is_empty() {
+                let span = reach.extent().max_element();
+                let finest = span / f64::from(i32::MAX);
+                if las_scale_m < finest {
+                    c.err(
+                        op.key("las_scale_m"),
+                        format!(
+                            "LAS stores coordinates as 32-bit integers of las_scale_m: points of \
+                             this survey may lie {} m apart (the scene, and everything within \
+                             scanner.max_range_m of the flight lines), which needs las_scale_m of \
+                             at least {} m, got {}",
+                            num(span),
+                            num(finest),
+                            num(las_scale_m)
+                        ),
+                    );
+                }
             }
         }
         if scene.primitives.is_empty() && c.problems.is_empty() {

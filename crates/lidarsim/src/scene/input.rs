@@ -1,0 +1,140 @@
+//! Opening the files a survey reads: regular files only, each within a
+//! size bound, and a "did you mean" for a name that is one typo away from
+//! a file that exists.
+//!
+//! A device such as `/dev/zero`, a FIFO or a directory named as a mesh,
+//! raster, cloud, trajectory or survey would otherwise be read without end.
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+/// Largest survey file read, bytes.
+pub const MAX_SURVEY_BYTES: u64 = 256 << 20;
+
+/// Largest mesh, raster, point cloud or glTF buffer read, bytes.
+pub const MAX_INPUT_BYTES: u64 = 16 << 30;
+
+/// Largest trajectory file read, bytes.
+pub const MAX_TRAJECTORY_BYTES: u64 = 4 << 30;
+
+/// Checks that `path` names a regular file of at most `max_bytes`
+/// (following links) and returns its length. The error says what is wrong
+/// in words, without the path (the caller names the file), with a "did you
+/// mean" when the file does not exist but a similar name does.
+pub fn check_input(path: &Path, max_bytes: u64) -> io::Result<u64> {
+    let meta = std::fs::metadata(path).map_err(|e| {
+        match similar_name(path).filter(|_| e.kind() == io::ErrorKind::NotFound) {
+            Some(near) => io::Error::new(
+                e.kind(),
+                format!("{e} (did you mean '{}'?)", near.display()),
+            ),
+            None => e,
+        }
+    })?;
+    if !meta.is_file() {
+        let what = if meta.is_dir() {
+            "is a directory"
+        } else {
+            "is not a regular file (a device, pipe or socket)"
+        };
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!("{what}: give the path of a file"),
+        ));
+    }
+    if meta.len() > max_bytes {
+        return Err(io::Error::new(
+            io::ErrorKind::InvalidInput,
+            format!(
+                "is {} bytes, more than the {max_bytes} bytes accepted for such a file",
+                meta.len()
+            ),
+        ));
+    }
+    Ok(meta.len())
+}
+
+/// Reads a whole input file after [`check_input`]; reads at most
+/// `max_bytes` even if the file grows meanwhile.
+pub fn read_input(path: &Path, max_bytes: u64) -> io::Result<Vec<u8>> {
+    use std::io::Read;
+    let len = check_input(path, max_bytes)?;
+    let file = std::fs::File::open(path)?;
+    let mut bytes = Vec::with_capacity(len as usize);
+    file.take(max_bytes).read_to_end(&mut bytes)?;
+    Ok(bytes)
+}
+
+/// A file beside `path` whose name is within two edits of its name (the
+/// closest), if any.
+fn similar_name(path: &Path) -> Option<PathBuf> {
+    let name = path.file_name()?.to_str()?;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    std::fs::read_dir(&dir)
+        .ok()?
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .map(|n| (edit_distance(name, &n), n))
+        .filter(|(d, _)| *d <= 2)
+        .min()
+        .map(|(_, n)| path.with_file_name(n))
+}
+
+/// Levenshtein distance between two short strings.
+pub fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut prev = row[0];
+        row[0] = i + 1;
+        for (j, cb) in b.iter().enumerate() {
+            let cur = row[j + 1];
+            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
+            prev = cur;
+        }
+    }
+    row[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn edit_distances_of_known_pairs() {
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("hosue.obj", "house.obj"), 2);
+        assert_eq!(edit_distance("", "abc"), 3);
+    }
+
+    #[test]
+    fn devices_directories_and_typos_are_named() {
+        let dir = std::env::temp_dir().join(format!("lidarsim-input-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(dir.join("house.obj"), "v 0 0 0\n").unwrap();
+        let e = check_input(&dir.join("hosue.obj"), 100)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("did you mean") && e.contains("house.obj"), "{e}");
+        let e = check_input(&dir, 100).unwrap_err().to_string();
+        assert!(e.contains("a directory"), "{e}");
+        #[cfg(unix)]
+        {
+            let e = check_input(Path::new("/dev/zero"), 100)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("not a regular file"), "{e}");
+        }
+        let e = check_input(&dir.join("house.obj"), 3)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("more than the 3 bytes"), "{e}");
+        assert_eq!(
+            read_input(&dir.join("house.obj"), 100).unwrap(),
+            b"v 0 0 0\n"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}
