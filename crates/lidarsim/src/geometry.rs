@@ -1,6 +1,6 @@
 //! Rays, boxes and the rotations between the scanner and the world.
 //!
-//! World frame (DESIGN.md, "Frames, units, conventions"): right-handed,
+//! World frame (docs/survey.md, "Conventions"): right-handed,
 //! X east, Y north, Z up, metres, `f64`. Scanner frame (specification,
 //! Fig. 8): `y` forward, `z` down, `x` to the left.
 

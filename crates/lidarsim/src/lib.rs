@@ -6,8 +6,8 @@
 //! waveform, detects echoes in it and writes georeferenced point clouds
 //! (LAS 1.4) with ground-truth classes.
 //!
-//! The models follow the project specification
-//! (`shared/seed/000_c806ae4c9704ad33.txt`, cited as "specification"); each
+//! The models follow the project specification, described in
+//! `docs/models.md` of the repository and cited as "specification"; each
 //! module names the equations it implements.
 //!
 //! Data flow, one module per step:

@@ -1,8 +1,7 @@
 //! Counter-based random streams.
 //!
 //! Every random number in the simulator comes from a stream keyed by
-//! `(seed, flight line, pulse index, purpose)` (DESIGN.md, "Randomness and
-//! reproducibility"). A stream is a pure function of its key and of how many
+//! `(seed, flight line, pulse index, purpose)`. A stream is a pure function of its key and of how many
 //! numbers were drawn from it, so the result never depends on which thread
 //! simulated a pulse or in which order pulses were scheduled.
 //!

@@ -1,6 +1,6 @@
 //! The simulation driver: pulses in, points out.
 //!
-//! For pulse `k` of a flight line (DESIGN.md, "Data flow"):
+//! For pulse `k` of a flight line (ARCHITECTURE.md, the pipeline):
 //! pose at `t_k` ∘ mirror angle at `t_k` → central ray and sub-rays →
 //! closest hits → Eq. 2 per sub-ray (with speckle) → waveform → echoes →
 //! georeferenced points (Eq. 1 on the central ray) with ground-truth

@@ -2,8 +2,7 @@
 //!
 //! The rest of the simulator sees only the [`RayCaster`] trait. It takes
 //! whole pulses ([`RayCaster::trace_pulse`]) so that an implementation can
-//! exploit the coherence of a pulse's sub-rays (DESIGN.md, "Performance
-//! stance"); the default implementation casts them one by one.
+//! exploit the coherence of a pulse's sub-rays; the default implementation casts them one by one.
 //!
 //! Two implementations: [`Bvh`], a bounding-volume hierarchy built with the
 //! surface-area heuristic (the default), and [`BruteForce`], which tests every

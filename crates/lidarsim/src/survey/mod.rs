@@ -1,6 +1,6 @@
 //! Survey configuration: parse, validate, build the scene.
 //!
-//! Two layers (STYLE.md, "Two layers of arguments"): [`RawSurvey`] mirrors
+//! Two layers (raw values as in the file, then a checked form): [`RawSurvey`] mirrors
 //! the TOML file; [`Survey`] is the checked form the simulator trusts, with
 //! units converted (degrees → radians, ns → s) and the [`Scene`] built.
 //! Every problem is reported as a [`Diagnostic`] naming the file, line,
