@@ -25,6 +25,36 @@
 
 use crate::waveform::{Receiver, Waveform, bin_to_range};
 
+/// Which echoes a receiver keeps when a pulse has more than it records.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ReturnSelection {
+    /// The first `max_returns − 1` and the last: the last echo is most
+    /// often the ground, which a terrain model needs (the default).
+    #[default]
+    FirstAndLast,
+    /// The first `max_returns` in time.
+    First,
+}
+
+impl ReturnSelection {
+    /// The rule named `name` in a survey file.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "first-and-last" => Some(Self::FirstAndLast),
+            "first" => Some(Self::First),
+            _ => None,
+        }
+    }
+
+    /// Its name in a survey file.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::FirstAndLast => "first-and-last",
+            Self::First => "first",
+        }
+    }
+}
+
 /// Detection settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DetectorConfig {
@@ -34,6 +64,8 @@ pub struct DetectorConfig {
     pub min_amplitude: f64,
     /// Largest number of echoes reported per pulse.
     pub max_returns: usize,
+    /// Which echoes are kept when there are more.
+    pub selection: ReturnSelection,
 }
 
 /// One detected echo.
@@ -130,6 +162,7 @@ impl Detector {
             peaks,
             valleys,
             widths,
+            bounds,
         } = scratch;
         signal.clear();
         // Without atmosphere the background is zero and the samples are the
@@ -144,17 +177,12 @@ impl Detector {
             peaks.clear();
             return;
         }
-        self.select(s, peaks, valleys, widths);
-        let n = s.len();
+        self.select(s, peaks, valleys, widths, bounds);
         for (k, &p) in peaks.iter().enumerate() {
             // The bins attributed to the peak: down to the lowest points
-            // between it and its neighbouring peaks, or to the window's ends.
-            let lo = if k == 0 { 0 } else { valleys[k - 1] };
-            let hi = if k + 1 < peaks.len() {
-                valleys[k]
-            } else {
-                n - 1
-            };
+            // between it and its neighbouring echoes (kept or not), or to
+            // the window's ends.
+            let (lo, hi) = bounds[k];
             let (offset, peak_amplitude) = refine(s, p, self.fit_half, lo, hi);
             // The selection measured this width already when the peak's
             // base was zero and its bounds are still the same.
@@ -179,8 +207,11 @@ impl Detector {
     }
 
     /// The maxima of `s` (at least 3 samples) that are echoes, first in
-    /// time first, up to `max_returns`, into `peaks`; `valleys[k]` is the
-    /// first lowest sample between `peaks[k]` and `peaks[k + 1]`.
+    /// time first, at most `max_returns` of them chosen by the selection
+    /// rule, into `peaks`; `bounds[k]` is the range of samples attributed
+    /// to `peaks[k]`: from the lowest sample between it and the echo before
+    /// it (kept or not; the window's start for the first) to the lowest
+    /// between it and the echo after it (the window's end for the last).
     /// `widths[k]` is `(lo, hi, w)`: the bounds within which peak `k`'s
     /// width was measured and, when its base was zero (so that the level
     /// was half its maximum), that width, else NaN.
@@ -196,10 +227,12 @@ impl Detector {
         peaks: &mut Vec<usize>,
         valleys: &mut Vec<usize>,
         widths: &mut Vec<(usize, usize, f64)>,
+        bounds: &mut Vec<(usize, usize)>,
     ) {
         peaks.clear();
         valleys.clear();
         widths.clear();
+        bounds.clear();
         let n = s.len();
         let thr = self.threshold;
         // Candidate maxima above the threshold that stand out by the
@@ -273,9 +306,28 @@ impl Detector {
             }
             peaks.remove(k);
         }
-        peaks.truncate(self.config.max_returns);
-        valleys.truncate(peaks.len().saturating_sub(1));
-        widths.truncate(peaks.len());
+        // Every echo's bounds, then the ones the receiver keeps.
+        bounds.extend((0..peaks.len()).map(|k| {
+            let lo = if k == 0 { 0 } else { valleys[k - 1] };
+            let hi = valleys.get(k).copied().unwrap_or(n - 1);
+            (lo, hi)
+        }));
+        let m = self.config.max_returns;
+        if peaks.len() > m {
+            let keep_last = self.config.selection == ReturnSelection::FirstAndLast;
+            let last = peaks.len() - 1;
+            let first = if keep_last { m - 1 } else { m };
+            let tail = (peaks[last], widths[last], bounds[last]);
+            peaks.truncate(first);
+            widths.truncate(first);
+            bounds.truncate(first);
+            if keep_last {
+                peaks.push(tail.0);
+                widths.push(tail.1);
+                bounds.push(tail.2);
+            }
+        }
+        valleys.clear();
     }
 }
 
@@ -290,6 +342,8 @@ pub struct DetectScratch {
     valleys: Vec<usize>,
     /// Widths measured by the selection, with their bounds.
     widths: Vec<(usize, usize, f64)>,
+    /// Samples attributed to each echo kept.
+    bounds: Vec<(usize, usize)>,
 }
 
 /// Calibrates the peak fit on the emitted pulse: for 256 sub-bin phases of
@@ -589,8 +643,8 @@ mod tests {
     use crate::waveform::{PulseShape, ReceiverConfig, Return};
 
     /// The peak selection as first written: each rule a separate pass,
-    /// every extent searched afresh.
-    fn select_by_definition(det: &Detector, s: &[f64]) -> Vec<usize> {
+    /// every extent searched afresh; the peaks kept and their bounds.
+    fn select_by_definition(det: &Detector, s: &[f64]) -> (Vec<usize>, Vec<(usize, usize)>) {
         let extent = |peaks: &[usize], k: usize| {
             let p = peaks[k];
             let lo = if k == 0 {
@@ -625,9 +679,20 @@ mod tests {
                 k += 1;
             }
         }
-        peaks.truncate(det.config.max_returns);
-        // The one-pass selection must also leave the valleys of these peaks.
-        peaks
+        let mut kept: Vec<usize> = (0..peaks.len()).collect();
+        let m = det.config.max_returns;
+        if kept.len() > m {
+            let last = kept.len() - 1;
+            match det.config.selection {
+                ReturnSelection::First => kept.truncate(m),
+                ReturnSelection::FirstAndLast => {
+                    kept.truncate(m - 1);
+                    kept.push(last);
+                }
+            }
+        }
+        let bounds = kept.iter().map(|&k| extent(&peaks, k)).collect();
+        (kept.iter().map(|&k| peaks[k]).collect(), bounds)
     }
 
     #[test]
@@ -716,6 +781,11 @@ mod tests {
                     threshold_sigma: 4.0,
                     min_amplitude: 0.005,
                     max_returns: 1 + case % 6,
+                    selection: if case % 2 == 0 {
+                        ReturnSelection::FirstAndLast
+                    } else {
+                        ReturnSelection::First
+                    },
                 },
                 &rx,
             );
@@ -739,12 +809,11 @@ mod tests {
                 .enumerate()
                 .map(|(i, v)| v - wf.background_at(i))
                 .collect();
-            let want = select_by_definition(&det, &s);
+            let (want, want_bounds) = select_by_definition(&det, &s);
             let mut out = Vec::new();
             det.detect(&wf, &mut scratch, &mut out);
             assert_eq!(scratch.peaks, want, "case {case}");
-            let valleys: Vec<usize> = want.windows(2).map(|w| argmin(&s, w[0], w[1])).collect();
-            assert_eq!(scratch.valleys, valleys, "case {case}");
+            assert_eq!(scratch.bounds, want_bounds, "case {case}");
             // Every width the selection kept for reuse is the half-maximum
             // width within the same bounds.
             for (&p, &(lo, hi, w)) in scratch.peaks.iter().zip(&scratch.widths) {
@@ -761,7 +830,8 @@ mod tests {
         // Arbitrary sequences: many maxima of every width and height, narrow
         // ones dropped next to each other and at both ends.
         let (_, det) = setup(PulseShape::Gaussian { fwhm_s: 4e-9 }, 0.01);
-        let (mut peaks, mut valleys, mut widths) = (Vec::new(), Vec::new(), Vec::new());
+        let (mut peaks, mut valleys, mut widths, mut bounds) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for case in 0..20_000 {
             let n = 3 + case % 60;
             let mut level: f64 = 0.0;
@@ -771,11 +841,9 @@ mod tests {
                     level + if rng.uniform() < 0.1 { 0.1 } else { 0.0 }
                 })
                 .collect();
-            det.select(&s, &mut peaks, &mut valleys, &mut widths);
-            let want = select_by_definition(&det, &s);
-            let want_valleys: Vec<usize> =
-                want.windows(2).map(|w| argmin(&s, w[0], w[1])).collect();
-            assert_eq!((&peaks, &valleys), (&want, &want_valleys), "{s:?}");
+            det.select(&s, &mut peaks, &mut valleys, &mut widths, &mut bounds);
+            let (want, want_bounds) = select_by_definition(&det, &s);
+            assert_eq!((&peaks, &bounds), (&want, &want_bounds), "{s:?}");
         }
     }
 
@@ -792,6 +860,7 @@ mod tests {
                 threshold_sigma: 4.0,
                 min_amplitude: 0.005,
                 max_returns: 5,
+                selection: ReturnSelection::default(),
             },
             &rx,
         );
@@ -927,7 +996,13 @@ mod tests {
             }
         }
         assert!(counts[1] >= 196, "{counts:?}");
-        // max_returns keeps the first ones in time.
+    }
+
+    /// Four echoes 3 m apart, two recorded: "first-and-last" keeps the
+    /// first and the last (the ground under a crown), "first" the first two;
+    /// either way no kept echo's bins reach into a dropped echo's.
+    #[test]
+    fn max_returns_keeps_the_last_echo_by_default() {
         let (rx, mut det) = setup(PulseShape::Gaussian { fwhm_s: 4e-9 }, 0.0);
         det.config.max_returns = 2;
         let rs: Vec<Return> = (0..4)
@@ -936,8 +1011,25 @@ mod tests {
                 power: 0.1,
             })
             .collect();
+        // 3 m apart are 40 bins of 500 ps: a dropped echo's peak is 20 bins
+        // beyond the valley before it.
+        let bin_of = |r: f64| 2.0 * r / crate::geometry::SPEED_OF_LIGHT_MPS / 500e-12;
+        assert_eq!(det.config.selection, ReturnSelection::FirstAndLast);
         let e = echoes(&rx, &det, &rs, 0);
         assert_eq!(e.len(), 2);
-        assert!((e[1].range_m - 103.0).abs() < 0.02);
+        assert!((e[0].range_m - 100.0).abs() < 0.02, "{e:?}");
+        assert!((e[1].range_m - 109.0).abs() < 0.02, "{e:?}");
+        assert!((e[0].last_bin as f64) < bin_of(101.5) + 1.0, "{e:?}");
+        assert!((e[1].first_bin as f64) > bin_of(107.5) - 1.0, "{e:?}");
+        det.config.selection = ReturnSelection::First;
+        let e = echoes(&rx, &det, &rs, 0);
+        assert_eq!(e.len(), 2);
+        assert!((e[1].range_m - 103.0).abs() < 0.02, "{e:?}");
+        assert!((e[1].last_bin as f64) < bin_of(104.5) + 1.0, "{e:?}");
+        // One recorded return: the last one, or the first.
+        det.config.max_returns = 1;
+        assert!((echoes(&rx, &det, &rs, 0)[0].range_m - 103.0 + 3.0).abs() < 0.02);
+        det.config.selection = ReturnSelection::FirstAndLast;
+        assert!((echoes(&rx, &det, &rs, 0)[0].range_m - 109.0).abs() < 0.02);
     }
 }

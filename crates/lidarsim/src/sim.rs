@@ -401,9 +401,14 @@ impl<'a> Simulator<'a> {
                     transmission,
                 } => {
                     let mat = &scene.materials[scene.primitives[prim as usize].material as usize];
-                    // Foliage: no incidence term (specification, "LiDAR
-                    // pulse in vegetation").
-                    let power = share * transmission * (rn / t).powi(2) * mat.reflectance * density;
+                    let power = self.canopy.return_model.foliage_return(
+                        *share,
+                        transmission,
+                        t,
+                        rn,
+                        mat.reflectance,
+                        density,
+                    );
                     (t, prim, power, DVec3::NAN)
                 }
                 Fate::Passed { transmission } => {

@@ -103,7 +103,7 @@ fn ground_fraction_under_a_uniform_crown_is_beer_lambert() {
     let mut last = 1.0;
     for k in [0.1, 0.25, 0.5] {
         let tree = format!(
-            "[vegetation]\npartial_blocking = 0.0\n[[tree]]\nposition_m = [0.0, 0.0, 0.0]\n\
+            "[[tree]]\nposition_m = [0.0, 0.0, 0.0]\n\
              species = \"spruce\"\ndbh_m = 0.3\nheight_m = 20.0\ncrown_base_m = 10.0\n\
              crown_radius_m = {radius}\nuniform_density = {rho}\nextinction_per_m = {k}\n"
         );

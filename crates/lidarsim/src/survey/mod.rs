@@ -17,8 +17,8 @@ use std::fmt;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use crate::canopy::CanopyConfig;
-use crate::detection::DetectorConfig;
+use crate::canopy::{CanopyConfig, ReturnModel};
+use crate::detection::{DetectorConfig, ReturnSelection};
 use crate::geometry::DVec3;
 use crate::navigation::{ErrorModel, LineErrors, NavigationErrors};
 use crate::platform::{Drift, FlightLine, Interpolation, Sway, SwayConfig, Track, plan_lines};
@@ -1776,6 +1776,19 @@ impl Survey {
             }
         };
         let max_returns = c.count(sp.key("max_returns"), s.max_returns, 5, 1, 15) as usize;
+        let selection = match s.return_selection.as_deref() {
+            None => ReturnSelection::default(),
+            Some(name) => ReturnSelection::from_name(name).unwrap_or_else(|| {
+                c.err(
+                    sp.key("return_selection"),
+                    format!(
+                        "unknown rule '{name}'; expected \"first-and-last\" (the default: the \
+                         first max_returns − 1 echoes and the last) or \"first\""
+                    ),
+                );
+                ReturnSelection::default()
+            }),
+        };
         let min_range_m = c.number(
             sp.key("min_range_m"),
             s.min_range_m,
@@ -2408,9 +2421,23 @@ impl Survey {
         // [vegetation], [[tree]], [[forest]]
         let v = &raw.vegetation;
         let vp = root.key("vegetation");
-        let canopy = CanopyConfig {
-            step_m: c.number(vp.key("step_m"), v.step_m, 0.3, 0.01, false, 10.0, " m"),
-            partial_blocking: c.number(
+        let return_model = match v.return_model.as_deref() {
+            None => ReturnModel::default(),
+            Some(name) => ReturnModel::from_name(name).unwrap_or_else(|| {
+                c.err(
+                    vp.key("return_model"),
+                    format!(
+                        "unknown return model '{name}'; expected \"physical\" (the default) or \
+                         \"specification\""
+                    ),
+                );
+                ReturnModel::default()
+            }),
+        };
+        // Partial blocking removes energy the lottery already accounts for:
+        // only the specification's model has it.
+        let partial_blocking = match return_model {
+            ReturnModel::Specification => c.number(
                 vp.key("partial_blocking"),
                 v.partial_blocking,
                 0.5,
@@ -2419,6 +2446,22 @@ impl Survey {
                 10.0,
                 "",
             ),
+            ReturnModel::Physical => {
+                if v.partial_blocking.is_some() {
+                    c.err(
+                        vp.key("partial_blocking"),
+                        "applies only with return_model = \"specification\": in the physical \
+                         model a sub-ray that passes the foliage keeps its energy (the \
+                         interception lottery already removes what the foliage intercepts)",
+                    );
+                }
+                0.0
+            }
+        };
+        let canopy = CanopyConfig {
+            step_m: c.number(vp.key("step_m"), v.step_m, 0.3, 0.01, false, 10.0, " m"),
+            partial_blocking,
+            return_model,
         };
         let whorl = c.number(
             vp.key("whorl_spacing_m"),
@@ -2728,6 +2771,7 @@ impl Survey {
                 threshold_sigma,
                 min_amplitude,
                 max_returns,
+                selection,
             },
             speckle_looks: r.speckle.unwrap_or(false).then_some(speckle_looks),
             intensity_gain,

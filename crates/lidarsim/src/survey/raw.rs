@@ -99,6 +99,10 @@ pub struct RawScanner {
     pub pulse_shape: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_returns: Option<i64>,
+    /// Which echoes are kept beyond `max_returns`: `"first-and-last"`
+    /// (default) or `"first"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub return_selection: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub min_range_m: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -301,6 +305,10 @@ pub struct RawVegetation {
     pub whorl_spacing_m: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub partial_blocking: Option<f64>,
+    /// How intercepting foliage returns a sub-ray: `"physical"` (default)
+    /// or `"specification"`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub return_model: Option<String>,
 }
 
 /// `[[tree]]`.
