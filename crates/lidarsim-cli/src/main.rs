@@ -616,9 +616,40 @@ fn render(
         Some(v) => {
             lidarsim::render::profile(&points, (v[0], v[1]), (v[2], v[3]), v[4], by, resolution)
         }
-    };
+    }
+    .map_err(|e| match resolution {
+        Some(_) => (2, format!("--resolution: {e}")),
+        None => (1, format!("{}: {e}", cloud.display())),
+    })?;
     img.save_png(output)
         .map_err(|e| (1, format!("{}: {e}", output.display())))
+}
+
+/// Refuses a file that does not start as a LAS or LAZ file does ("LASF"),
+/// saying so in words with its first bytes. Shorter files that begin like
+/// one are left to the LAS reader, which says they end early.
+fn check_las_signature(cloud: &Path) -> Result<(), String> {
+    use std::io::Read;
+    let Ok(file) = std::fs::File::open(cloud) else {
+        return Ok(());
+    };
+    let mut head = Vec::with_capacity(4);
+    if file.take(4).read_to_end(&mut head).is_err() || b"LASF".starts_with(&head) {
+        return Ok(());
+    }
+    let shown: String = head
+        .iter()
+        .map(|&b| match b {
+            b'"' => "\\\"".to_string(),
+            0x20..=0x7e => char::from(b).to_string(),
+            _ => format!("\\x{b:02x}"),
+        })
+        .collect();
+    Err(format!(
+        "{} is not a LAS or LAZ file (it starts with \"{shown}\"); render takes a point cloud \
+         such as points.las",
+        cloud.display()
+    ))
 }
 
 /// Reads every point of a LAS file for rendering. Errors name the file and
@@ -628,6 +659,7 @@ fn read_cloud(cloud: &Path) -> Result<Vec<lidarsim::render::RenderPoint>, String
     use lidarsim::render::RenderPoint;
     use lidarsim::scene::cloud::{describe_las_error, open_las};
     let bad = |e: las::Error| format!("{}: {}", cloud.display(), describe_las_error(&e));
+    check_las_signature(cloud)?;
     let mut reader = open_las(cloud).map_err(|why| format!("{}: {why}", cloud.display()))?;
     reader
         .read_all()

@@ -24,6 +24,8 @@ const MAX_PIXELS: usize = 500_000;
 const DENSITY_CELL_M: f64 = 5.0;
 /// Largest number of points kept for the cross-section.
 const MAX_PROFILE_POINTS: usize = 200_000;
+/// Height of the cross-section's plot, px.
+const PROFILE_HEIGHT_PX: usize = 300;
 
 /// Collects what the report shows while points are written.
 #[derive(Debug)]
@@ -181,16 +183,18 @@ impl ReportSink {
         (framed(&map, &p, self.resolution_m), median)
     }
 
-    /// Cross-section along x through the middle of the area, 2 m wide.
+    /// Cross-section along x through the middle of the area, 2 m wide, by
+    /// class, its heights stretched to fill the picture.
     pub fn profile_image(&self) -> Image {
         let x1 = self.x0 + self.width as f64 * self.resolution_m;
-        crate::render::profile(
+        crate::render::profile_exaggerated(
             &self.profile,
             (self.x0, self.profile_y),
             (x1, self.profile_y),
             2.0,
             ColorBy::Class,
-            Some(((x1 - self.x0) / 1200.0).max(0.1)),
+            ((x1 - self.x0) / 1200.0).max(0.1),
+            PROFILE_HEIGHT_PX,
         )
     }
 }
