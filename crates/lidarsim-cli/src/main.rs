@@ -88,18 +88,31 @@ enum Command {
         survey: PathBuf,
     },
     /// Plot the full waveform of one pulse of a run (simulated again from its survey.toml).
+    /// Name the pulse by --line and --pulse, by a point's --gps-time, or by a
+    /// place with --near.
     Waveform {
-        /// Output directory of a run (it holds survey.toml).
+        /// Output directory of a run (it holds survey.toml, and points.las or
+        /// points.laz for --near).
         dir: PathBuf,
-        /// Pulse index within its flight line (see pulse numbers in points.xyz order).
-        #[arg(long, conflicts_with = "gps_time")]
+        /// Pulse number within the flight line given by --line, from 0 (emitted
+        /// at the line's start time + N / PRF). Point files have no pulse
+        /// column: to find a point's pulse use --gps-time or --near.
+        #[arg(long, conflicts_with_all = ["gps_time", "near"])]
         pulse: Option<u64>,
-        /// Flight line (the point source ID: 1 for the first line).
+        /// Flight line number for --pulse, 1 for the first: the point source ID
+        /// of points.las (point_source_id in points.xyz).
         #[arg(long, default_value_t = 1)]
         line: u32,
-        /// Find the pulse by its GPS time instead (a point's gps_time).
-        #[arg(long)]
+        /// Find the pulse by the GPS time of one of its points: the gps_time of
+        /// any point in points.las, points.xyz or points.ply (it includes [output]
+        /// gps_start_time_s).
+        #[arg(long, conflicts_with = "near")]
         gps_time: Option<f64>,
+        /// Find the pulse of the point of DIR/points.las (or points.laz) nearest
+        /// to X,Y[,Z], in the coordinates of that file (with [output]
+        /// offset_m); horizontal distance when Z is omitted.
+        #[arg(long, value_name = "X,Y[,Z]", allow_hyphen_values = true)]
+        near: Option<String>,
         /// Output PNG.
         #[arg(short, long, default_value = "waveform.png")]
         output: PathBuf,
@@ -247,8 +260,9 @@ fn main() -> ExitCode {
             pulse,
             line,
             gps_time,
+            near,
             output,
-        } => match waveform(&dir, pulse, line, gps_time, &output) {
+        } => match waveform(&dir, pulse, line, gps_time, near.as_deref(), &output) {
             Ok(()) => ExitCode::SUCCESS,
             Err((code, msg)) => fail(code, &msg),
         },
@@ -486,21 +500,133 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, resume: bool)
     }
 }
 
+/// The point of a run's point file nearest to a place.
+struct Nearest {
+    /// Its coordinates, as in the file.
+    at: [f64; 3],
+    /// Its distance from the place, m.
+    distance_m: f64,
+    /// Its point source ID (flight line number, 1 for the first).
+    source: u16,
+    /// Its GPS time, s.
+    gps_time_s: f64,
+}
+
+/// The point of a run's `points.las` (or `points.laz`) nearest to `near`
+/// ("X,Y" or "X,Y,Z", horizontal distance without Z).
+fn nearest_point(dir: &Path, near: &str) -> Result<Nearest, (u8, String)> {
+    let q: Vec<f64> = near
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .ok()
+        .filter(|v: &Vec<f64>| (2..=3).contains(&v.len()) && v.iter().all(|x| x.is_finite()))
+        .ok_or_else(|| (2, format!("--near {near}: expected X,Y or X,Y,Z in metres")))?;
+    let cloud = ["points.las", "points.laz"]
+        .iter()
+        .map(|f| dir.join(f))
+        .find(|p| p.is_file())
+        .ok_or_else(|| {
+            (
+                2,
+                format!(
+                    "--near: {} holds neither points.las nor points.laz (the run's [output] \
+                     formats need las or laz)",
+                    dir.display()
+                ),
+            )
+        })?;
+    let bad = |e: las::Error| {
+        (
+            1,
+            format!(
+                "{}: {}",
+                cloud.display(),
+                lidarsim::scene::cloud::describe_las_error(&e)
+            ),
+        )
+    };
+    let mut reader = lidarsim::scene::cloud::open_las(&cloud)
+        .map_err(|why| (1, format!("{}: {why}", cloud.display())))?;
+    let mut best: Option<([f64; 3], f64, u16, Option<f64>)> = None;
+    loop {
+        let batch = reader.read_points(1 << 16).map_err(bad)?;
+        if batch.is_empty() {
+            break;
+        }
+        for p in batch.points() {
+            let p = p.map_err(bad)?;
+            let (dx, dy) = (p.x - q[0], p.y - q[1]);
+            let dz = q.get(2).map_or(0.0, |z| p.z - z);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            if d2.is_finite() && best.is_none_or(|b| d2 < b.1) {
+                best = Some(([p.x, p.y, p.z], d2, p.point_source_id, p.gps_time));
+            }
+        }
+    }
+    let (at, d2, source, gps) =
+        best.ok_or_else(|| (2, format!("--near: {} holds no point", cloud.display())))?;
+    let gps = gps.ok_or_else(|| {
+        (
+            2,
+            format!(
+                "--near: the points of {} carry no GPS time",
+                cloud.display()
+            ),
+        )
+    })?;
+    Ok(Nearest {
+        at,
+        distance_m: d2.sqrt(),
+        source,
+        gps_time_s: gps,
+    })
+}
+
 /// Simulates one pulse of a run again and plots its waveform.
 fn waveform(
     dir: &Path,
     pulse: Option<u64>,
     line: u32,
     gps_time: Option<f64>,
+    near: Option<&str>,
     output: &Path,
 ) -> Result<(), (u8, String)> {
     let survey_path = dir.join("survey.toml");
     let survey = Survey::load(&survey_path).map_err(|e| (2, e.to_string()))?;
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
     let prf = survey.scanner.prf_hz;
-    // The line and pulse: given, or found from a GPS time.
-    let (line_ref, k) = match gps_time {
-        Some(t) => {
+    // The line and pulse: given, or found from a point's GPS time (and,
+    // for --near, its point source ID).
+    let (line_ref, k) = match (near, gps_time) {
+        (Some(near), _) => {
+            let Nearest {
+                at: [x, y, z],
+                distance_m: d,
+                source,
+                gps_time_s: gps,
+            } = nearest_point(dir, near)?;
+            let l = survey
+                .lines
+                .get(usize::from(source).wrapping_sub(1))
+                .ok_or_else(|| {
+                    (
+                        2,
+                        format!(
+                            "--near: the nearest point has point source ID {source}, but the \
+                             survey has flight lines 1 to {}",
+                            survey.lines.len()
+                        ),
+                    )
+                })?;
+            let k = ((gps - offset - l.start_time_s) * prf).round().max(0.0) as u64;
+            say!(
+                "nearest point to {near}: ({x:.3}, {y:.3}, {z:.3}), {d:.3} m away, \
+                 line {source} (point source ID), GPS time {gps:.6} s: pulse {k}"
+            );
+            (l, k)
+        }
+        (None, Some(t)) => {
             let t = t - offset;
             let l = survey
                 .lines
@@ -514,7 +640,7 @@ fn waveform(
                 })?;
             (l, ((t - l.start_time_s) * prf).round().max(0.0) as u64)
         }
-        None => {
+        (None, None) => {
             let l = survey
                 .lines
                 .get((line as usize).wrapping_sub(1))
@@ -527,7 +653,12 @@ fn waveform(
                         ),
                     )
                 })?;
-            let k = pulse.ok_or_else(|| (2, "give --pulse N or --gps-time T".to_string()))?;
+            let k = pulse.ok_or_else(|| {
+                (
+                    2,
+                    "give --pulse N (with --line L), --gps-time T or --near X,Y[,Z]".to_string(),
+                )
+            })?;
             (l, k)
         }
     };
@@ -747,7 +878,7 @@ fn check(survey: &Survey) {
         say!(
             "  line {}: {} pulses, {:.1} s, {:.1} m above ground, swath {:.1} m, {:.2} pts/m², \
              scan lines every {:.2} m, footprints every {:.2} m across",
-            l.line,
+            l.line + 1,
             l.pulses,
             l.duration_s,
             l.height_above_ground_m,
