@@ -104,13 +104,13 @@ enum Command {
         #[arg(long, default_value_t = 1)]
         line: u32,
         /// Find the pulse by the GPS time of one of its points: the gps_time of
-        /// any point in points.las, points.xyz or points.ply (it includes [output]
-        /// gps_start_time_s).
+        /// any point in points.las, points.xyz or points.ply (it includes the
+        /// survey's output.gps_start_time_s).
         #[arg(long, conflicts_with = "near")]
         gps_time: Option<f64>,
         /// Find the pulse of the point of DIR/points.las (or points.laz) nearest
-        /// to X,Y[,Z], in the coordinates of that file (with [output]
-        /// offset_m); horizontal distance when Z is omitted.
+        /// to X,Y or X,Y,Z, in the coordinates of that file (those of the
+        /// survey plus output.offset_m); horizontal distance without Z.
         #[arg(long, value_name = "X,Y[,Z]", allow_hyphen_values = true)]
         near: Option<String>,
         /// Output PNG.

@@ -20,9 +20,9 @@
 //!   right angles this is the pulse's FWHM; an echo stretched in time or
 //!   merged from several surfaces is as much wider as its energy is spread
 //!   (the FWHM of the pulse-shaped echo of the same energy and peak), never
-//!   narrower than the pulse without noise. Measuring where the noisy
-//!   samples first cross half the highest one instead made weak echoes
-//!   look narrower than the pulse (2.5 ns for 4 ns at four times the noise);
+//!   narrower than the pulse without noise. Energy and fitted peak average
+//!   many samples, whereas the first crossings of half the highest noisy
+//!   sample lie too close to it on weak echoes;
 //! * its *energy amplitude*: the echo's energy (sum of samples within two
 //!   widths of the peak) divided by the energy of the emitted pulse of unit
 //!   peak measured the same way. For an echo from a single surface at right
