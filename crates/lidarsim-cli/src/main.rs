@@ -112,18 +112,31 @@ enum Command {
         output: PathBuf,
     },
     /// Plot the full waveform of one pulse of a run (simulated again from its survey.toml).
+    /// Name the pulse by --line and --pulse, by a point's --gps-time, or by a
+    /// place with --near.
     Waveform {
-        /// Output directory of a run (it holds survey.toml).
+        /// Output directory of a run (it holds survey.toml, and points.las or
+        /// points.laz for --near).
         dir: PathBuf,
-        /// Pulse index within its flight line (see pulse numbers in points.xyz order).
-        #[arg(long, conflicts_with = "gps_time")]
+        /// Pulse number within the flight line given by --line, from 0 (emitted
+        /// at the line's start time + N / PRF). Point files have no pulse
+        /// column: to find a point's pulse use --gps-time or --near.
+        #[arg(long, conflicts_with_all = ["gps_time", "near"])]
         pulse: Option<u64>,
-        /// Flight line (the point source ID: 1 for the first line).
+        /// Flight line number for --pulse, 1 for the first: the point source ID
+        /// of points.las (point_source_id in points.xyz).
         #[arg(long, default_value_t = 1)]
         line: u32,
-        /// Find the pulse by its GPS time instead (a point's gps_time).
-        #[arg(long)]
+        /// Find the pulse by the GPS time of one of its points: the gps_time of
+        /// any point in points.las, points.xyz or points.ply (it includes the
+        /// survey's output.gps_start_time_s).
+        #[arg(long, conflicts_with = "near")]
         gps_time: Option<f64>,
+        /// Find the pulse of the point of DIR/points.las (or points.laz) nearest
+        /// to X,Y or X,Y,Z, in the coordinates of that file (those of the
+        /// survey plus output.offset_m); horizontal distance without Z.
+        #[arg(long, value_name = "X,Y[,Z]", allow_hyphen_values = true)]
+        near: Option<String>,
         /// Output PNG.
         #[arg(short, long, default_value = "waveform.png")]
         output: PathBuf,
@@ -292,8 +305,9 @@ fn main() -> ExitCode {
             pulse,
             line,
             gps_time,
+            near,
             output,
-        } => match waveform(&dir, pulse, line, gps_time, &output) {
+        } => match waveform(&dir, pulse, line, gps_time, near.as_deref(), &output) {
             Ok(()) => ExitCode::SUCCESS,
             Err((code, msg)) => fail(code, &msg),
         },
@@ -586,21 +600,133 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, how: How) -> 
     }
 }
 
+/// The point of a run's point file nearest to a place.
+struct Nearest {
+    /// Its coordinates, as in the file.
+    at: [f64; 3],
+    /// Its distance from the place, m.
+    distance_m: f64,
+    /// Its point source ID (flight line number, 1 for the first).
+    source: u16,
+    /// Its GPS time, s.
+    gps_time_s: f64,
+}
+
+/// The point of a run's `points.las` (or `points.laz`) nearest to `near`
+/// ("X,Y" or "X,Y,Z", horizontal distance without Z).
+fn nearest_point(dir: &Path, near: &str) -> Result<Nearest, (u8, String)> {
+    let q: Vec<f64> = near
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .ok()
+        .filter(|v: &Vec<f64>| (2..=3).contains(&v.len()) && v.iter().all(|x| x.is_finite()))
+        .ok_or_else(|| (2, format!("--near {near}: expected X,Y or X,Y,Z in metres")))?;
+    let cloud = ["points.las", "points.laz"]
+        .iter()
+        .map(|f| dir.join(f))
+        .find(|p| p.is_file())
+        .ok_or_else(|| {
+            (
+                2,
+                format!(
+                    "--near: {} holds neither points.las nor points.laz (the run's [output] \
+                     formats need las or laz)",
+                    dir.display()
+                ),
+            )
+        })?;
+    let bad = |e: las::Error| {
+        (
+            1,
+            format!(
+                "{}: {}",
+                cloud.display(),
+                lidarsim::scene::cloud::describe_las_error(&e)
+            ),
+        )
+    };
+    let mut reader = lidarsim::scene::cloud::open_las(&cloud)
+        .map_err(|why| (1, format!("{}: {why}", cloud.display())))?;
+    let mut best: Option<([f64; 3], f64, u16, Option<f64>)> = None;
+    loop {
+        let batch = reader.read_points(1 << 16).map_err(bad)?;
+        if batch.is_empty() {
+            break;
+        }
+        for p in batch.points() {
+            let p = p.map_err(bad)?;
+            let (dx, dy) = (p.x - q[0], p.y - q[1]);
+            let dz = q.get(2).map_or(0.0, |z| p.z - z);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            if d2.is_finite() && best.is_none_or(|b| d2 < b.1) {
+                best = Some(([p.x, p.y, p.z], d2, p.point_source_id, p.gps_time));
+            }
+        }
+    }
+    let (at, d2, source, gps) =
+        best.ok_or_else(|| (2, format!("--near: {} holds no point", cloud.display())))?;
+    let gps = gps.ok_or_else(|| {
+        (
+            2,
+            format!(
+                "--near: the points of {} carry no GPS time",
+                cloud.display()
+            ),
+        )
+    })?;
+    Ok(Nearest {
+        at,
+        distance_m: d2.sqrt(),
+        source,
+        gps_time_s: gps,
+    })
+}
+
 /// Simulates one pulse of a run again and plots its waveform.
 fn waveform(
     dir: &Path,
     pulse: Option<u64>,
     line: u32,
     gps_time: Option<f64>,
+    near: Option<&str>,
     output: &Path,
 ) -> Result<(), (u8, String)> {
     let survey_path = dir.join("survey.toml");
     let survey = Survey::load(&survey_path).map_err(|e| (2, e.to_string()))?;
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
     let prf = survey.scanner.prf_hz;
-    // The line and pulse: given, or found from a GPS time.
-    let (line_ref, k) = match gps_time {
-        Some(t) => {
+    // The line and pulse: given, or found from a point's GPS time (and,
+    // for --near, its point source ID).
+    let (line_ref, k) = match (near, gps_time) {
+        (Some(near), _) => {
+            let Nearest {
+                at: [x, y, z],
+                distance_m: d,
+                source,
+                gps_time_s: gps,
+            } = nearest_point(dir, near)?;
+            let l = survey
+                .lines
+                .get(usize::from(source).wrapping_sub(1))
+                .ok_or_else(|| {
+                    (
+                        2,
+                        format!(
+                            "--near: the nearest point has point source ID {source}, but the \
+                             survey has flight lines 1 to {}",
+                            survey.lines.len()
+                        ),
+                    )
+                })?;
+            let k = ((gps - offset - l.start_time_s) * prf).round().max(0.0) as u64;
+            say!(
+                "nearest point to {near}: ({x:.3}, {y:.3}, {z:.3}), {d:.3} m away, \
+                 line {source} (point source ID), GPS time {gps:.6} s: pulse {k}"
+            );
+            (l, k)
+        }
+        (None, Some(t)) => {
             let t = t - offset;
             let l = survey
                 .lines
@@ -614,7 +740,7 @@ fn waveform(
                 })?;
             (l, ((t - l.start_time_s) * prf).round().max(0.0) as u64)
         }
-        None => {
+        (None, None) => {
             let l = survey
                 .lines
                 .get((line as usize).wrapping_sub(1))
@@ -627,7 +753,12 @@ fn waveform(
                         ),
                     )
                 })?;
-            let k = pulse.ok_or_else(|| (2, "give --pulse N or --gps-time T".to_string()))?;
+            let k = pulse.ok_or_else(|| {
+                (
+                    2,
+                    "give --pulse N (with --line L), --gps-time T or --near X,Y[,Z]".to_string(),
+                )
+            })?;
             (l, k)
         }
     };
@@ -716,9 +847,40 @@ fn render(
         Some(v) => {
             lidarsim::render::profile(&points, (v[0], v[1]), (v[2], v[3]), v[4], by, resolution)
         }
-    };
+    }
+    .map_err(|e| match resolution {
+        Some(_) => (2, format!("--resolution: {e}")),
+        None => (1, format!("{}: {e}", cloud.display())),
+    })?;
     img.save_png(output)
         .map_err(|e| (1, format!("{}: {e}", output.display())))
+}
+
+/// Refuses a file that does not start as a LAS or LAZ file does ("LASF"),
+/// saying so in words with its first bytes. Shorter files that begin like
+/// one are left to the LAS reader, which says they end early.
+fn check_las_signature(cloud: &Path) -> Result<(), String> {
+    use std::io::Read;
+    let Ok(file) = std::fs::File::open(cloud) else {
+        return Ok(());
+    };
+    let mut head = Vec::with_capacity(4);
+    if file.take(4).read_to_end(&mut head).is_err() || b"LASF".starts_with(&head) {
+        return Ok(());
+    }
+    let shown: String = head
+        .iter()
+        .map(|&b| match b {
+            b'"' => "\\\"".to_string(),
+            0x20..=0x7e => char::from(b).to_string(),
+            _ => format!("\\x{b:02x}"),
+        })
+        .collect();
+    Err(format!(
+        "{} is not a LAS or LAZ file (it starts with \"{shown}\"); render takes a point cloud \
+         such as points.las",
+        cloud.display()
+    ))
 }
 
 /// Reads every point of a LAS file for rendering. Errors name the file and
@@ -728,6 +890,7 @@ fn read_cloud(cloud: &Path) -> Result<Vec<lidarsim::render::RenderPoint>, String
     use lidarsim::render::RenderPoint;
     use lidarsim::scene::cloud::{describe_las_error, open_las};
     let bad = |e: las::Error| format!("{}: {}", cloud.display(), describe_las_error(&e));
+    check_las_signature(cloud)?;
     let mut reader = open_las(cloud).map_err(|why| format!("{}: {why}", cloud.display()))?;
     reader
         .read_all()
@@ -842,7 +1005,7 @@ fn check(survey: &Survey, output: &Path) {
         say!(
             "  line {}: {} pulses, {:.1} s, {:.1} m above ground, swath {:.1} m, {:.2} pts/m², \
              scan lines every {:.2} m, footprints every {:.2} m across",
-            l.line,
+            l.line + 1,
             l.pulses,
             l.duration_s,
             l.height_above_ground_m,

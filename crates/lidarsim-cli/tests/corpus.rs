@@ -321,8 +321,14 @@ fn broken_las_files_for_render() {
         ),
         ("count_too_large.las", "points outside the file"),
         ("offset_beyond_end.las", "the file ends early"),
-        ("wrong_signature.las", "the file signature is not 'LASF'"),
-        ("text_file.las", "the file signature is not 'LASF'"),
+        (
+            "wrong_signature.las",
+            "is not a LAS or LAZ file (it starts with \"LASX\")",
+        ),
+        (
+            "text_file.las",
+            "is not a LAS or LAZ file (it starts with \"x y \")",
+        ),
         ("record_length_1.las", "record length 1 is too small"),
         ("unknown_point_format.las", "invalid format number: 77"),
     ];
