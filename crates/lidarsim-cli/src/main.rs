@@ -1005,7 +1005,7 @@ fn check(survey: &Survey, output: &Path) {
         say!(
             "  line {}: {} pulses, {:.1} s, {:.1} m above ground, swath {:.1} m, {:.2} pts/m², \
              scan lines every {:.2} m, footprints every {:.2} m across",
-            l.line + 1,
+            l.line,
             l.pulses,
             l.duration_s,
             l.height_above_ground_m,
