@@ -49,6 +49,7 @@
 #![deny(missing_docs)]
 
 pub mod accel;
+pub mod beam;
 pub mod bench;
 pub mod budget;
 pub mod canopy;

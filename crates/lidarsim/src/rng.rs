@@ -33,6 +33,8 @@ pub enum Purpose {
     Navigation = 6,
     /// White navigation, ranging and encoder noise of one pulse.
     Measurement = 7,
+    /// The sub-ray pattern of one pulse and its turn about the beam axis.
+    Beam = 8,
     /// Spare purpose for tests and user extensions.
     Test = 0xFFFF,
 }

@@ -17,6 +17,7 @@ use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
 use crate::accel::{Hit, PulseTrace, RayCaster, VolumeSpan};
+use crate::beam::{Beam, BeamPattern};
 use crate::canopy::{CanopyConfig, Fate, march};
 use crate::detection::{DetectScratch, Detector, Echo};
 use crate::geometry::{Attitude, DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
@@ -25,7 +26,7 @@ use crate::output::{PointRecord, PointSink, WaveformBlock, WaveformPacket};
 use crate::platform::{FlightLine, LineFrame};
 use crate::radiometry::{Speckle, surface_return};
 use crate::rng::{Purpose, Stream};
-use crate::scanner::{BeamPattern, Mirror};
+use crate::scanner::Mirror;
 use crate::scene::{Shape, SurfaceClass};
 use crate::survey::Survey;
 use crate::waveform::{Receiver, Return, Waveform};
@@ -73,6 +74,14 @@ impl RunCounts {
 pub struct Scratch {
     dirs: Vec<DVec3>,
     trace: PulseTrace,
+    /// Which sub-rays' cells are sampled again.
+    refine: Vec<bool>,
+    /// The fine samples of those cells: undeflected direction and share.
+    fine: Vec<(DVec3, f64)>,
+    /// Their directions in the world frame.
+    fine_dirs: Vec<DVec3>,
+    /// Their closest hits and crown spans.
+    fine_trace: PulseTrace,
     spans: Vec<VolumeSpan>,
     returns: Vec<Return>,
     /// Primitive of each return and the surface normal there (NaN for
@@ -237,7 +246,11 @@ pub struct Simulator<'a> {
     caster: &'a dyn RayCaster,
     receiver: Receiver,
     detector: Detector,
-    pattern: BeamPattern,
+    beam: Beam,
+    /// Range difference between neighbouring sub-rays that makes their
+    /// cells be sampled again: the range resolution, `c·FWHM/2` (closer
+    /// surfaces merge into one echo whatever their share).
+    discontinuity_m: f64,
     speckle: Option<Speckle>,
     canopy: CanopyConfig,
     time_offset_s: f64,
@@ -258,7 +271,9 @@ impl<'a> Simulator<'a> {
         Self {
             survey,
             caster,
-            pattern: BeamPattern::new(survey.scanner.subrays, survey.scanner.divergence_rad),
+            beam: Beam::new(survey.scanner.subrays, survey.scanner.divergence_rad),
+            discontinuity_m: crate::geometry::SPEED_OF_LIGHT_MPS * survey.receiver.pulse.fwhm_s()
+                / 2.0,
             speckle: survey.speckle_looks.and_then(Speckle::new),
             canopy: survey.canopy,
             boresight: survey.navigation.boresight(),
@@ -323,36 +338,56 @@ impl<'a> Simulator<'a> {
         let origin = pose.position_m + body * s.navigation.lever_arm_m;
         // The deflection's third column is the beam direction
         // (`Mirror::beam_direction`), from the same sine and cosine.
-        let deflection = BeamPattern::deflection(theta);
+        let deflection = crate::beam::deflection(theta);
         let central = rot * deflection.z_axis;
+        // Random streams are keyed by pulse and purpose, so creating them
+        // only when first needed gives the same numbers.
+        let stream = |purpose| Stream::new(s.seed, line.index, k, purpose);
 
-        // Sub-rays in the world frame, cast as one pulse.
+        // Sub-rays in the world frame, cast as one pulse: the pulse's
+        // jittered pattern.
+        let pattern = self.beam.for_pulse(|| stream(Purpose::Beam));
         let to_world = rot * deflection;
-        scratch.dirs.clear();
-        scratch
-            .dirs
-            .extend(self.pattern.base_directions().iter().map(|d| to_world * *d));
-        self.caster.trace_pulse(
-            origin,
-            &scratch.dirs,
-            s.scanner.min_range_m,
-            s.scanner.max_range_m,
-            &mut scratch.spans,
-            &mut scratch.trace,
-        );
+        let Scratch {
+            dirs,
+            trace,
+            spans,
+            refine,
+            fine,
+            fine_dirs,
+            fine_trace,
+            returns,
+            return_surfaces,
+            ..
+        } = &mut *scratch;
+        dirs.clear();
+        dirs.extend(pattern.base_directions().iter().map(|d| to_world * *d));
+        let (t_min, t_max) = (s.scanner.min_range_m, s.scanner.max_range_m);
+        self.caster
+            .trace_pulse(origin, dirs, t_min, t_max, spans, trace);
+        // Cells across a discontinuity the receiver resolves are sampled
+        // again, finely (beam.rs).
+        let refined = pattern.refined() && self.mark_discontinuities(pattern, trace, refine);
+        if refined {
+            fine.clear();
+            for (i, _) in refine.iter().enumerate().filter(|(_, r)| **r) {
+                pattern.fine_samples(i, fine);
+            }
+            fine_dirs.clear();
+            fine_dirs.extend(fine.iter().map(|(d, _)| to_world * *d));
+            self.caster
+                .trace_pulse(origin, fine_dirs, t_min, t_max, spans, fine_trace);
+        }
 
         // Each sub-ray: through the crowns on its way (the interception
         // lottery), then Eq. 2 at the surface it reaches.
         let scene = self.caster.scene();
         let rn = s.receiver.reference_range_m;
-        // Random streams are keyed by pulse and purpose, so creating them
-        // only when first needed gives the same numbers.
-        let stream = |purpose| Stream::new(s.seed, line.index, k, purpose);
         let mut speckle_rng: Option<Stream> = None;
         let mut canopy_rng: Option<Stream> = None;
-        scratch.returns.clear();
-        scratch.return_surfaces.clear();
-        // Eq. 2 at the surface a sub-ray hit.
+        returns.clear();
+        return_surfaces.clear();
+        // Eq. 2 at the surface a sub-ray of energy `share` reached.
         let surface = |hit: &Hit, dir: &DVec3, share: f64| {
             let mat = &scene.materials[scene.primitives[hit.prim as usize].material as usize];
             let cos_inc = (-dir.dot(hit.normal)).clamp(0.0, 1.0);
@@ -365,65 +400,82 @@ impl<'a> Simulator<'a> {
                 mat.incidence_exponent,
             )
         };
-        // Without crowns on any sub-ray's way (the trace recorded no
-        // spans), every sub-ray brings all its energy to its surface: Eq. 2
-        // alone (1 × it, as the canopy's fate gives it, is the same number).
-        let no_crowns = scratch.trace.has_no_spans();
-        for (i, (dir, share)) in scratch.dirs.iter().zip(self.pattern.weights()).enumerate() {
-            if no_crowns {
-                let Some(hit) = scratch.trace.hit(i) else {
+        let share = pattern.share();
+        if !refined && trace.has_no_spans() {
+            // No crown on any sub-ray's way and no cell sampled again:
+            // every sub-ray brings all its energy to its surface.
+            for (i, dir) in dirs.iter().enumerate() {
+                let Some(hit) = trace.hit(i) else {
                     continue;
                 };
-                let mut power = surface(&hit, dir, *share);
+                let mut power = surface(&hit, dir, share);
                 if let Some(sp) = &self.speckle {
                     power *= sp.factor(speckle_rng.get_or_insert_with(|| stream(Purpose::Speckle)));
                 }
-                scratch.returns.push(Return {
+                returns.push(Return {
                     range_m: hit.t,
                     power,
                 });
-                scratch.return_surfaces.push((hit.prim, hit.normal));
-                continue;
+                return_surfaces.push((hit.prim, hit.normal));
             }
-            let spans = scratch.trace.spans_of(i);
-            let fate = if spans.is_empty() {
-                Fate::Passed { transmission: 1.0 }
-            } else {
-                let ray = Ray { origin, dir: *dir };
-                let rng = canopy_rng.get_or_insert_with(|| stream(Purpose::Canopy));
-                march(scene, &ray, spans, &self.canopy, rng)
-            };
-            let (range_m, prim, mut power, normal) = match fate {
-                Fate::Intercepted {
-                    t,
-                    prim,
-                    density,
-                    transmission,
-                } => {
-                    let mat = &scene.materials[scene.primitives[prim as usize].material as usize];
-                    let power = self.canopy.return_model.foliage_return(
-                        *share,
-                        transmission,
+        } else {
+            let mut emit = |dir: &DVec3, share: f64, hit: Option<Hit>, crowns: &[VolumeSpan]| {
+                let fate = if crowns.is_empty() {
+                    Fate::Passed { transmission: 1.0 }
+                } else {
+                    let ray = Ray { origin, dir: *dir };
+                    let rng = canopy_rng.get_or_insert_with(|| stream(Purpose::Canopy));
+                    march(scene, &ray, crowns, &self.canopy, rng)
+                };
+                let (range_m, prim, mut power, normal) = match fate {
+                    Fate::Intercepted {
                         t,
-                        rn,
-                        mat.reflectance,
+                        prim,
                         density,
-                    );
-                    (t, prim, power, DVec3::NAN)
+                        transmission,
+                    } => {
+                        let mat =
+                            &scene.materials[scene.primitives[prim as usize].material as usize];
+                        let power = self.canopy.return_model.foliage_return(
+                            share,
+                            transmission,
+                            t,
+                            rn,
+                            mat.reflectance,
+                            density,
+                        );
+                        (t, prim, power, DVec3::NAN)
+                    }
+                    Fate::Passed { transmission } => {
+                        let Some(hit) = hit else {
+                            return;
+                        };
+                        let power = transmission * surface(&hit, dir, share);
+                        (hit.t, hit.prim, power, hit.normal)
+                    }
+                };
+                if let Some(sp) = &self.speckle {
+                    power *= sp.factor(speckle_rng.get_or_insert_with(|| stream(Purpose::Speckle)));
                 }
-                Fate::Passed { transmission } => {
-                    let Some(hit) = scratch.trace.hit(i) else {
-                        continue;
-                    };
-                    let power = transmission * surface(&hit, dir, *share);
-                    (hit.t, hit.prim, power, hit.normal)
-                }
+                returns.push(Return { range_m, power });
+                return_surfaces.push((prim, normal));
             };
-            if let Some(sp) = &self.speckle {
-                power *= sp.factor(speckle_rng.get_or_insert_with(|| stream(Purpose::Speckle)));
+            let mut f = 0;
+            for (i, dir) in dirs.iter().enumerate() {
+                if refined && refine[i] {
+                    for _ in 0..crate::beam::FINE_PER_CELL {
+                        emit(
+                            &fine_dirs[f],
+                            fine[f].1,
+                            fine_trace.hit(f),
+                            fine_trace.spans_of(f),
+                        );
+                        f += 1;
+                    }
+                } else {
+                    emit(dir, share, trace.hit(i), trace.spans_of(i));
+                }
             }
-            scratch.returns.push(Return { range_m, power });
-            scratch.return_surfaces.push((prim, normal));
         }
         if scratch.returns.is_empty() {
             scratch.waveform.samples.clear();
@@ -567,6 +619,47 @@ impl<'a> Simulator<'a> {
             });
         }
         n
+    }
+
+    /// Marks in `refine` the sub-rays of `pattern` whose closest hit in
+    /// `trace` and a neighbour's differ by more than the range resolution
+    /// (or one hits and the other misses): the cells on both sides of a
+    /// discontinuity the receiver resolves. Returns whether any is.
+    fn mark_discontinuities(
+        &self,
+        pattern: &BeamPattern,
+        trace: &PulseTrace,
+        refine: &mut Vec<bool>,
+    ) -> bool {
+        let n = pattern.len();
+        // The usual case: every sub-ray meets one continuous surface.
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for i in 0..n {
+            let r = trace.range(i);
+            lo = lo.min(r);
+            hi = hi.max(r);
+        }
+        if hi - lo <= self.discontinuity_m || lo == f64::INFINITY {
+            return false;
+        }
+        refine.clear();
+        refine.resize(n, false);
+        let differ = |a: f64, b: f64| {
+            a.is_finite() != b.is_finite()
+                || (a.is_finite() && (a - b).abs() > self.discontinuity_m)
+        };
+        let mut any = false;
+        for i in 0..n {
+            let a = trace.range(i);
+            for j in pattern.neighbours(i) {
+                if differ(a, trace.range(j)) {
+                    refine[i] = true;
+                    refine[j] = true;
+                    any = true;
+                }
+            }
+        }
+        any
     }
 
     /// Height of `p` above the ground-class surface beneath it (infinite

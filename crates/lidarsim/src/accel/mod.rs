@@ -91,6 +91,12 @@ impl PulseTrace {
         (prim != NO_HIT).then_some(Hit { t, prim, normal })
     }
 
+    /// Distance to sub-ray `i`'s closest hit, infinite for a miss.
+    #[inline]
+    pub fn range(&self, i: usize) -> f64 {
+        self.hits[i].0
+    }
+
     /// True when no sub-ray has a volume span (no crown on its way).
     #[inline]
     pub fn has_no_spans(&self) -> bool {
