@@ -633,13 +633,8 @@ impl<'a> Simulator<'a> {
     ) -> bool {
         let n = pattern.len();
         // The usual case: every sub-ray meets one continuous surface.
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for i in 0..n {
-            let r = trace.range(i);
-            lo = lo.min(r);
-            hi = hi.max(r);
-        }
-        if hi - lo <= self.discontinuity_m || lo == f64::INFINITY {
+        let (lo, hi) = trace.range_span();
+        if lo == f64::INFINITY || hi - lo <= self.discontinuity_m {
             return false;
         }
         refine.clear();

@@ -97,6 +97,22 @@ impl PulseTrace {
         self.hits[i].0
     }
 
+    /// The nearest and the farthest closest hit of the sub-rays (infinite
+    /// for a miss).
+    pub fn range_span(&self) -> (f64, f64) {
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        for h in &self.hits {
+            // Comparisons rather than `f64::min`/`max`: ranges are never NaN.
+            if h.0 < lo {
+                lo = h.0;
+            }
+            if h.0 > hi {
+                hi = h.0;
+            }
+        }
+        (lo, hi)
+    }
+
     /// True when no sub-ray has a volume span (no crown on its way).
     #[inline]
     pub fn has_no_spans(&self) -> bool {
