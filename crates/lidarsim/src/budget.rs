@@ -1,10 +1,12 @@
 //! What a run will cost before it runs: the size of every file it writes
 //! and the memory it needs, and whether the machine has them.
 //!
-//! Points are estimated as one per pulse, plus an allowance for multiple
-//! returns under crowns: [`EXTRA_RETURNS_UNDER_CROWNS`] more per pulse over
-//! the share of the scene's area that crowns cover (at most
-//! `max_returns − 1`). Pulses that miss the scene are counted too, so the
+//! Points are estimated as one per pulse that can reach the scene (the
+//! pulses emitted while the line's swath overlaps the scene's extent),
+//! plus an allowance for multiple returns under crowns:
+//! [`EXTRA_RETURNS_UNDER_CROWNS`] more per pulse over the share of the
+//! scene's area that crowns cover (at most `max_returns − 1`). Pulses over
+//! the scene that find nothing (gaps between objects) are counted, so the
 //! estimate errs on the large side. File sizes follow from the points and
 //! each format's record; memory from the scene as loaded, its index, the
 //! per-thread buffers of the receiver and the sinks' buffers.
@@ -13,6 +15,7 @@ use std::path::Path;
 
 use serde::Serialize;
 
+use crate::geometry::Aabb;
 use crate::output::{WAVEFORM_BITS, WDP_HEADER_LEN};
 use crate::scene::{Scene, Shape};
 use crate::survey::Survey;
@@ -128,6 +131,30 @@ fn scene_bytes(scene: &Scene) -> u64 {
             .sum::<u64>()
 }
 
+/// The share of `line`'s duration during which its swath (the scan
+/// half-angle over the height above the scene's bottom, plus the
+/// footprint) overlaps the scene's extent `b` in plan, from 256 samples.
+fn share_over_scene(survey: &Survey, line: &crate::platform::FlightLine, b: Aabb) -> f64 {
+    if b.is_empty() {
+        return 0.0;
+    }
+    let s = &survey.scanner;
+    let samples = 256;
+    let over = (0..samples)
+        .filter(|&k| {
+            let t = line.duration_s() * (f64::from(k) + 0.5) / f64::from(samples);
+            let p = line.pose_at(t).position_m;
+            let h = (p.z - b.min.z).max(0.0).min(s.max_range_m);
+            let reach = h * (s.mirror.scan_half_angle_rad + 0.5 * s.divergence_rad).tan() + 1.0;
+            p.x + reach >= b.min.x
+                && p.x - reach <= b.max.x
+                && p.y + reach >= b.min.y
+                && p.y - reach <= b.max.y
+        })
+        .count();
+    over as f64 / f64::from(samples)
+}
+
 /// Estimates the run of `survey` over `scene` on `threads` threads.
 pub fn estimate(survey: &Survey, scene: &Scene, threads: usize) -> Budget {
     let o = &survey.output;
@@ -136,9 +163,14 @@ pub fn estimate(survey: &Survey, scene: &Scene, threads: usize) -> Budget {
     let cover = crown_cover(scene);
     let extra = EXTRA_RETURNS_UNDER_CROWNS.min(survey.detector.max_returns as f64 - 1.0);
     let per_pulse = 1.0 + cover * extra;
-    let points = (pulses as f64 * per_pulse).ceil() as u64;
-    // The largest coordinate written, for the text formats.
     let b = scene.bounds();
+    let over: f64 = survey
+        .lines
+        .iter()
+        .map(|l| survey.pulses_of(l) as f64 * share_over_scene(survey, l, b))
+        .sum();
+    let points = (over * per_pulse).ceil() as u64;
+    // The largest coordinate written, for the text formats.
     let mut far = if b.is_empty() {
         0.0
     } else {
