@@ -519,9 +519,9 @@ fn a_flight_below_the_ground_is_warned_about() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A run whose output cannot fit any disk (a day at 10 MHz: 8.6 × 10¹¹
-/// pulses, about 43 TB of LAS) is refused before it starts, with the
-/// figures; `check` warns about it.
+/// A run whose output cannot fit any disk (a day at 10 MHz over ground
+/// along the whole line: 8.6 × 10¹¹ pulses, about 43 TB of LAS) is refused
+/// before it starts, with the figures; `check` warns about it.
 #[test]
 fn a_run_too_large_for_the_disk_is_refused_before_it_starts() {
     let dir = temp("huge");
@@ -531,6 +531,11 @@ fn a_run_too_large_for_the_disk_is_refused_before_it_starts() {
         .replace(
             "end_m = [0.0, 10.0, 300.0]\nspeed_mps = 50.0",
             "end_m = [0.0, 4319990.0, 300.0]\nspeed_mps = 50.0",
+        )
+        // Ground under the whole line.
+        .replace(
+            "[300, 300, 0], [-300, 300, 0]",
+            "[300, 4320300, 0], [-300, 4320300, 0]",
         );
     std::fs::write(&survey, text).unwrap();
     let out = dir.join("out");
