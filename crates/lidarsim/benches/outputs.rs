@@ -16,8 +16,8 @@ use std::path::Path;
 use lidarsim::Survey;
 use lidarsim::accel::Bvh;
 use lidarsim::bench::TimedSink;
+use lidarsim::files::las_settings;
 use lidarsim::output::{LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter};
-use lidarsim::run::las_settings;
 use lidarsim::sim::Simulator;
 
 fn main() {
@@ -27,7 +27,7 @@ fn main() {
     std::fs::create_dir_all(&dir).expect("output directory");
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
     let base = las_settings(&survey, &bvh);
-    let digitizer = lidarsim::run::digitizer(&survey, &bvh);
+    let digitizer = lidarsim::files::digitizer(&survey, &bvh);
     let cases: [(&str, &[&str]); 6] = [
         ("las", &["points.las"]),
         ("laz", &["points.laz"]),

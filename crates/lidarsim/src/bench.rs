@@ -25,8 +25,8 @@ use std::time::{Duration, Instant};
 
 use crate::Survey;
 use crate::accel::{Bvh, RayCaster};
+use crate::files::las_settings;
 use crate::output::{LasWriter, PointRecord, PointSink, WaveformBlock};
-use crate::run::las_settings;
 use crate::sim::Simulator;
 
 /// A benchmark scene.

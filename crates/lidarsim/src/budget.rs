@@ -134,7 +134,7 @@ fn scene_bytes(scene: &Scene) -> u64 {
 /// The share of `line`'s duration during which its swath (the scan
 /// half-angle over the height above the scene's bottom, plus the
 /// footprint) overlaps the scene's extent `b` in plan, from 256 samples.
-fn share_over_scene(survey: &Survey, line: &crate::platform::FlightLine, b: Aabb) -> f64 {
+fn share_over_scene(survey: &Survey, line: &crate::sensor::platform::FlightLine, b: Aabb) -> f64 {
     if b.is_empty() {
         return 0.0;
     }
@@ -198,7 +198,7 @@ pub fn estimate(survey: &Survey, scene: &Scene, threads: usize) -> Budget {
             bytes,
         })
     };
-    let las = crate::run::las_settings_for(survey, b);
+    let las = crate::files::las_settings_for(survey, b);
     if f.las {
         let mut s = las.clone();
         if f.las_waveform {

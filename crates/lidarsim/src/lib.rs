@@ -49,25 +49,24 @@
 #![deny(missing_docs)]
 
 pub mod accel;
-pub mod beam;
 pub mod bench;
 pub mod budget;
 pub mod canopy;
 pub mod demo;
 pub mod detection;
+pub mod files;
 pub mod geometry;
-pub mod navigation;
 pub mod output;
 pub mod plan;
-pub mod platform;
 pub mod radiometry;
 pub mod render;
 pub mod report;
 pub mod rng;
 pub mod run;
-pub mod scanner;
 pub mod scene;
+pub mod sensor;
 pub mod sim;
+pub mod summary;
 pub mod survey;
 pub mod waveform;
 

@@ -78,7 +78,7 @@ pub fn ground_below(caster: &dyn RayCaster, p: DVec3) -> f64 {
 /// the sensor, and how far above: sampled at 17 points along the line.
 fn ground_above(
     caster: &dyn RayCaster,
-    line: &crate::platform::FlightLine,
+    line: &crate::sensor::platform::FlightLine,
 ) -> Option<(DVec3, f64)> {
     let ground = |prim: &crate::scene::Primitive| {
         matches!(
@@ -112,8 +112,8 @@ pub fn plan(survey: &Survey, caster: &dyn RayCaster) -> Plan {
         // Angular step between pulses at nadir for a triangle mirror is
         // 4 θ f / PRF; for a sine mirror it is 2π θ f / PRF.
         let omega = match s.mirror.profile {
-            crate::scanner::MirrorProfile::Triangle => 4.0,
-            crate::scanner::MirrorProfile::Sine => std::f64::consts::TAU,
+            crate::sensor::scanner::MirrorProfile::Triangle => 4.0,
+            crate::sensor::scanner::MirrorProfile::Sine => std::f64::consts::TAU,
         } * s.mirror.scan_half_angle_rad
             * s.mirror.scan_frequency_hz;
         lines.push(LinePlan {

@@ -975,7 +975,7 @@ impl WaveformPlot {
     /// detection threshold and the echoes.
     pub fn of_pulse(
         sim: &crate::sim::Simulator<'_>,
-        line: &crate::platform::FlightLine,
+        line: &crate::sensor::platform::FlightLine,
         k: u64,
     ) -> (Self, crate::sim::Scratch) {
         let mut scratch = crate::sim::Scratch::default();

@@ -21,7 +21,7 @@ use crate::render::{
     ColorBy, Image, Palette, RenderPoint, Series, WaveformPlot, class_color, fixed, framed,
     hole_source, no_data,
 };
-use crate::run::Summary;
+use crate::summary::Summary;
 use crate::survey::Survey;
 
 /// Largest number of pixels of the report's maps.
@@ -562,10 +562,10 @@ fn pulse_words(p: &crate::waveform::PulseShape) -> String {
 }
 
 /// The mirror's motion in words.
-fn mirror_words(m: &crate::scanner::MirrorProfile) -> &'static str {
+fn mirror_words(m: &crate::sensor::scanner::MirrorProfile) -> &'static str {
     match m {
-        crate::scanner::MirrorProfile::Triangle => "triangle (constant angular speed)",
-        crate::scanner::MirrorProfile::Sine => "sine",
+        crate::sensor::scanner::MirrorProfile::Triangle => "triangle (constant angular speed)",
+        crate::sensor::scanner::MirrorProfile::Sine => "sine",
     }
 }
 
@@ -583,7 +583,7 @@ fn ordinal(n: usize) -> String {
 /// For each flight line, about [`FLIGHT_SAMPLES`] over the whole survey:
 /// the time since the survey's start and the time since the line's start,
 /// s (both ends of the line included).
-fn flight_samples(survey: &Survey) -> Vec<(&crate::platform::FlightLine, Vec<(f64, f64)>)> {
+fn flight_samples(survey: &Survey) -> Vec<(&crate::sensor::platform::FlightLine, Vec<(f64, f64)>)> {
     let total: f64 = survey.lines.iter().map(|l| l.duration_s()).sum();
     let dt = (total / FLIGHT_SAMPLES as f64).max(1e-6);
     survey
@@ -672,7 +672,7 @@ pub fn trajectory_error_plots(survey: &Survey) -> (Image, Image) {
             ts.iter()
                 .map(|&(abs, t)| {
                     let truth = l.pose_at(t);
-                    let seen = crate::navigation::observed_pose(
+                    let seen = crate::sensor::navigation::observed_pose(
                         &truth,
                         &survey.navigation,
                         &l.nav_errors,

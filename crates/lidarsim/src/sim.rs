@@ -17,17 +17,17 @@ use std::sync::{Condvar, Mutex};
 use std::time::Instant;
 
 use crate::accel::{Hit, PulseTrace, RayCaster, VolumeSpan};
-use crate::beam::{Beam, BeamPattern};
 use crate::canopy::{CanopyConfig, Fate, march};
 use crate::detection::{DetectScratch, Detector, Echo};
 use crate::geometry::{Attitude, DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
-use crate::navigation::observed_pose;
 use crate::output::{PointRecord, PointSink, WaveformBlock, WaveformPacket};
-use crate::platform::{FlightLine, LineFrame};
 use crate::radiometry::{Speckle, surface_return};
 use crate::rng::{Purpose, Stream};
-use crate::scanner::Mirror;
 use crate::scene::{Shape, SurfaceClass};
+use crate::sensor::beam::{Beam, BeamPattern};
+use crate::sensor::navigation::observed_pose;
+use crate::sensor::platform::{FlightLine, LineFrame};
+use crate::sensor::scanner::Mirror;
 use crate::survey::Survey;
 use crate::waveform::{Receiver, Return, Waveform};
 
@@ -338,7 +338,7 @@ impl<'a> Simulator<'a> {
         let origin = pose.position_m + body * s.navigation.lever_arm_m;
         // The deflection's third column is the beam direction
         // (`Mirror::beam_direction`), from the same sine and cosine.
-        let deflection = crate::beam::deflection(theta);
+        let deflection = crate::sensor::beam::deflection(theta);
         let central = rot * deflection.z_axis;
         // Random streams are keyed by pulse and purpose, so creating them
         // only when first needed gives the same numbers.
@@ -463,7 +463,7 @@ impl<'a> Simulator<'a> {
             let mut f = 0;
             for (i, dir) in dirs.iter().enumerate() {
                 if refined && refine[i] {
-                    for _ in 0..crate::beam::FINE_PER_CELL {
+                    for _ in 0..crate::sensor::beam::FINE_PER_CELL {
                         emit(
                             &fine_dirs[f],
                             fine[f].1,
@@ -1057,7 +1057,7 @@ mod tests {
     fn line(index: u32, start: DVec3, end: DVec3) -> FlightLine {
         FlightLine {
             index,
-            ..crate::platform::tests::line(start, end)
+            ..crate::sensor::platform::tests::line(start, end)
         }
     }
 

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use lidarsim::Survey;
 use lidarsim::output::{LasSettings, LasWriter, PointRecord, PointSink};
-use lidarsim::platform::Interpolation;
+use lidarsim::sensor::platform::Interpolation;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 

@@ -8,26 +8,27 @@
 
 pub mod outdir;
 pub mod resume;
-pub mod summary;
 
+pub use crate::summary::Summary;
 pub use resume::NextPulse;
-pub use summary::Summary;
 
-use std::io::{self, Write};
+use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use crate::accel::{Bvh, RayCaster};
-use crate::navigation::observed_pose;
+use crate::files::{
+    digitizer, input_files, las_settings, point_files, replayable, write_trajectory,
+};
 use crate::output::{
-    AtomicFile, FileError, LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter, write_atomic,
+    FileError, LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter, write_atomic,
 };
 use crate::plan::{Plan, plan};
 use crate::report::ReportSink;
 use crate::scene::Scene;
 use crate::sim::{PulsePosition, RunControl, RunCounts, Simulator, Timer};
+use crate::summary::Measured;
 use crate::survey::Survey;
-use summary::Measured;
 
 /// A failure while writing the results.
 #[derive(Debug, thiserror::Error)]
@@ -111,38 +112,6 @@ fn run_error(dir: &Path, e: io::Error) -> RunError {
         path: dir.to_path_buf(),
         source: e,
     }
-}
-
-/// The point files a survey writes, by final name (`points.wdp` with
-/// full waveforms).
-fn point_files(survey: &Survey) -> Vec<&'static str> {
-    let f = &survey.output.formats;
-    [
-        ("points.las", f.las),
-        ("points.wdp", f.las_waveform),
-        ("points.laz", f.laz),
-        ("points.ply", f.ply),
-        ("points.xyz", f.xyz),
-    ]
-    .into_iter()
-    .filter_map(|(n, on)| on.then_some(n))
-    .collect()
-}
-
-/// The files `survey` reads: the survey file, meshes, rasters, point
-/// clouds and the trajectory file.
-fn input_files(survey: &Survey) -> Vec<PathBuf> {
-    let raw = replayable(survey);
-    let mut inputs: Vec<PathBuf> = survey.source.iter().cloned().collect();
-    let files = raw
-        .meshes
-        .iter()
-        .map(|m| &m.file)
-        .chain(raw.terrains.iter().map(|t| &t.file))
-        .chain(raw.point_clouds.iter().map(|c| &c.file))
-        .chain(std::iter::once(&raw.platform.trajectory_file));
-    inputs.extend(files.flatten().map(PathBuf::from));
-    inputs
 }
 
 /// Simulates `survey` and writes the point files of `[output] formats`
@@ -493,146 +462,4 @@ fn covered_area(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> crate::
     } else {
         scene
     }
-}
-
-/// The raw survey with its seed fixed and relative file paths (meshes,
-/// terrain rasters, point clouds, trajectory file) resolved against the
-/// survey's directory.
-pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
-    let mut raw = survey.raw.clone();
-    raw.seed = Some(survey.seed);
-    let base = survey
-        .source
-        .as_ref()
-        .and_then(|p| p.parent())
-        .map(Path::to_path_buf)
-        .unwrap_or_default();
-    let resolve = |f: &mut String| {
-        let p = base.join(&*f);
-        if let Ok(abs) = std::path::absolute(&p) {
-            *f = abs.display().to_string();
-        }
-    };
-    let files = raw
-        .meshes
-        .iter_mut()
-        .map(|m| &mut m.file)
-        .chain(raw.terrains.iter_mut().map(|t| &mut t.file))
-        .chain(raw.point_clouds.iter_mut().map(|c| &mut c.file));
-    for f in files.flatten() {
-        resolve(f);
-    }
-    if let Some(f) = raw.platform.trajectory_file.as_mut() {
-        resolve(f);
-    }
-    raw
-}
-
-/// LAS header settings: offset at the scene centre (plus `[output]
-/// offset_m`) rounded to 100 m (so that coordinates stay small integers),
-/// the survey's scale, the creation date from `SOURCE_DATE_EPOCH` if set
-/// (reproducible files) or today, echo attributes and error vector as extra
-/// bytes, the CRS; point format 6, uncompressed.
-pub fn las_settings(survey: &Survey, caster: &dyn RayCaster) -> LasSettings {
-    las_settings_for(survey, caster.scene().bounds())
-}
-
-/// [`las_settings`] for a scene with bounds `b`.
-pub fn las_settings_for(survey: &Survey, b: crate::geometry::Aabb) -> LasSettings {
-    let origin = survey.output.offset_m;
-    let c = origin
-        + if b.is_empty() {
-            crate::geometry::DVec3::ZERO
-        } else {
-            b.center()
-        };
-    let round = |v: f64| (v / 100.0).round() * 100.0;
-    let now = std::env::var("SOURCE_DATE_EPOCH")
-        .ok()
-        .and_then(|s| s.trim().parse::<i64>().ok())
-        .unwrap_or_else(|| {
-            std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map_or(0, |d| d.as_secs() as i64)
-        });
-    LasSettings {
-        scale_m: survey.output.las_scale_m,
-        offset_m: [round(c.x), round(c.y), round(origin.z)],
-        origin_m: origin.to_array(),
-        adjusted_standard_gps_time: survey.output.gps_start_time_s.is_some(),
-        file_source_id: if survey.lines.len() == 1 {
-            (survey.lines[0].index + 1) as u16
-        } else {
-            0
-        },
-        creation_day_year: crate::output::day_of_year(now),
-        generating_software: format!("lidarsim {}", env!("CARGO_PKG_VERSION")),
-        error_extra_bytes: !survey.navigation.is_zero(),
-        attribute_extra_bytes: survey.output.extra_bytes,
-        crs_wkt: survey.output.crs_wkt.clone(),
-        compressed: false,
-        waveform: None,
-        waveform_file_shared: false,
-    }
-}
-
-/// The waveform digitiser of a survey: its receiver's sample spacing, and
-/// a full scale of twice the strongest echo the survey can give without
-/// speckle — a white Lambertian surface filling the beam head-on at the
-/// closest range a flight line comes to the top of the scene, `(Rn / R)²`
-/// (specification Eq. 2) — and at least 1.
-pub fn digitizer(survey: &Survey, caster: &dyn RayCaster) -> crate::output::Digitizer {
-    let top = caster.scene().bounds();
-    let top_z = if top.is_empty() { 0.0 } else { top.max.z };
-    let closest = survey
-        .lines
-        .iter()
-        .map(|l| l.start_m.z.min(l.end_m.z) - top_z)
-        .fold(f64::INFINITY, f64::min)
-        .max(survey.scanner.min_range_m)
-        .max(1.0);
-    let rn = survey.receiver.reference_range_m;
-    crate::output::Digitizer::with_full_scale(
-        (survey.receiver.bin_s * 1e12).round() as u32,
-        (2.0 * (rn / closest).powi(2)).max(1.0),
-    )
-}
-
-/// Writes the trajectory, one row per `trajectory_interval_s` of each
-/// flight line: time (in the points' time base), position, attitude in
-/// degrees, line number. `observed` selects the trajectory the GNSS/IMU
-/// measured (biases and correlated errors; the per-pulse white noise is not
-/// in it) instead of the one flown.
-pub fn write_trajectory(survey: &Survey, path: &Path, observed: bool) -> io::Result<()> {
-    let mut f = AtomicFile::create(path)?;
-    let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
-    let dt = survey.output.trajectory_interval_s;
-    let origin = survey.output.offset_m;
-    let w = f.writer();
-    writeln!(w, "gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line")?;
-    for line in &survey.lines {
-        let n = (line.duration_s() / dt).floor() as u64;
-        for j in 0..=n {
-            let t = j as f64 * dt;
-            let truth = line.pose_at(t);
-            let p = if observed {
-                observed_pose(&truth, &survey.navigation, &line.nav_errors, t, None)
-            } else {
-                truth
-            };
-            writeln!(
-                w,
-                "{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}",
-                offset + line.start_time_s + t,
-                p.position_m.x + origin.x,
-                p.position_m.y + origin.y,
-                p.position_m.z + origin.z,
-                p.attitude.roll_rad.to_degrees(),
-                p.attitude.pitch_rad.to_degrees(),
-                p.attitude.yaw_rad.to_degrees(),
-                line.index + 1
-            )?;
-        }
-    }
-    f.commit()
 }

@@ -15,55 +15,13 @@ use std::collections::BTreeMap;
 use std::io::{self, Read, Seek, SeekFrom};
 use std::path::Path;
 
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 
 use super::RunError;
 use crate::output::AtomicFile;
 use crate::sim::{PulsePosition, RunCounts};
+pub use crate::summary::{FileState, NextPulse, ResumeState};
 use crate::survey::Survey;
-
-/// A pulse as users count flight lines: line 1 is the first (the LAS
-/// point source ID).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-pub struct NextPulse {
-    /// Flight line number, 1 for the first.
-    pub line: u32,
-    /// Pulse index within the line, 0 for the first.
-    pub pulse: u64,
-}
-
-impl NextPulse {
-    /// The user's numbering of an internal position.
-    pub fn of(p: PulsePosition) -> Self {
-        Self {
-            line: p.line as u32 + 1,
-            pulse: p.pulse,
-        }
-    }
-}
-
-/// One file of an interrupted run, as it was when the run stopped.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct FileState {
-    /// Its length, bytes.
-    pub bytes: u64,
-    /// FNV-1a hash of its last mebibyte (of the whole file when shorter).
-    pub tail_fnv1a: String,
-}
-
-/// The record of an interrupted run that a resumed run checks.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
-pub struct ResumeState {
-    /// Each point file by its final name (on disk as `NAME.partial`).
-    pub files: BTreeMap<String, FileState>,
-    /// FNV-1a hash of the run's `survey.toml`.
-    pub survey_fnv1a: String,
-    /// FNV-1a hash of the report's saved state.
-    pub report_state_fnv1a: String,
-    /// FNV-1a hash over the seed, the next pulse, the counts and the
-    /// hashes above: any edit of the record shows.
-    pub state_fnv1a: String,
-}
 
 /// What a resumed run reads back from the `summary.json` of the
 /// interrupted one.

@@ -20,15 +20,17 @@ use std::path::{Path, PathBuf};
 use crate::canopy::{CanopyConfig, ReturnModel};
 use crate::detection::{DetectorConfig, ReturnSelection};
 use crate::geometry::DVec3;
-use crate::navigation::{ErrorModel, LineErrors, NavigationErrors};
-use crate::platform::{Drift, FlightLine, Interpolation, Sway, SwayConfig, Track, plan_lines};
-use crate::scanner::{Mirror, MirrorProfile};
 use crate::scene::forest::{ForestSpec, generate};
 use crate::scene::input::edit_distance;
 use crate::scene::{
     Material, MeshPlacement, Polygon, Primitive, Scene, Shape, Species, SurfaceClass, TreeSpec,
     load_obj,
 };
+use crate::sensor::navigation::{ErrorModel, LineErrors, NavigationErrors};
+use crate::sensor::platform::{
+    Drift, FlightLine, Interpolation, Sway, SwayConfig, Track, plan_lines,
+};
+use crate::sensor::scanner::{Mirror, MirrorProfile};
 use crate::waveform::{PulseShape, ReceiverConfig, range_to_bin};
 
 /// Highest pulse repetition frequency accepted, Hz.
@@ -571,12 +573,12 @@ fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationErrors {
     let root = KeyPath::root();
     let lookup = |c: &mut Checker, path: KeyPath, name: &Option<String>| match name {
         None => None,
-        Some(n) => crate::navigation::preset(n).or_else(|| {
+        Some(n) => crate::sensor::navigation::preset(n).or_else(|| {
             c.err(
                 path,
                 format!(
                     "unknown preset '{n}'; expected one of: {}",
-                    crate::navigation::PRESETS.join(", ")
+                    crate::sensor::navigation::PRESETS.join(", ")
                 ),
             );
             None
@@ -916,7 +918,7 @@ fn check_plan(
         );
         return Vec::new();
     }
-    let lines = crate::platform::plan_line_count(&area, -heading.to_radians(), spacing);
+    let lines = crate::sensor::platform::plan_line_count(&area, -heading.to_radians(), spacing);
     if lines > MAX_PLAN_LINES as f64 {
         let key = if plan.line_spacing_m.is_some() {
             pp.key("line_spacing_m")

@@ -26,8 +26,8 @@
 //! observed pose stays a pure function of time. White noise comes from the
 //! counter-based stream of each pulse.
 
+use super::Pose;
 use crate::geometry::{Attitude, DMat3, DVec3, rot_x, rot_y, rot_z};
-use crate::platform::Pose;
 use crate::rng::{Purpose, Stream};
 
 /// Rate at which the correlated errors are generated, Hz.

@@ -1,12 +1,13 @@
 //! `summary.json`: what a run did, the parameters it used and what it
 //! expected (the plan), and, for an interrupted run, where to go on.
 
-use serde::Serialize;
+use std::collections::BTreeMap;
 
-use super::resume::{NextPulse, ResumeState};
+use serde::{Deserialize, Serialize};
+
 use crate::budget::Budget;
 use crate::plan::Plan;
-use crate::sim::RunCounts;
+use crate::sim::{PulsePosition, RunCounts};
 use crate::survey::Survey;
 
 /// Contents of `summary.json`.
@@ -153,4 +154,47 @@ impl Summary {
             estimate: m.estimate.clone(),
         }
     }
+}
+
+/// A pulse as users count flight lines: line 1 is the first (the LAS
+/// point source ID).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct NextPulse {
+    /// Flight line number, 1 for the first.
+    pub line: u32,
+    /// Pulse index within the line, 0 for the first.
+    pub pulse: u64,
+}
+
+impl NextPulse {
+    /// The user's numbering of an internal position.
+    pub fn of(p: PulsePosition) -> Self {
+        Self {
+            line: p.line as u32 + 1,
+            pulse: p.pulse,
+        }
+    }
+}
+
+/// One file of an interrupted run, as it was when the run stopped.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct FileState {
+    /// Its length, bytes.
+    pub bytes: u64,
+    /// FNV-1a hash of its last mebibyte (of the whole file when shorter).
+    pub tail_fnv1a: String,
+}
+
+/// The record of an interrupted run that a resumed run checks.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ResumeState {
+    /// Each point file by its final name (on disk as `NAME.partial`).
+    pub files: BTreeMap<String, FileState>,
+    /// FNV-1a hash of the run's `survey.toml`.
+    pub survey_fnv1a: String,
+    /// FNV-1a hash of the report's saved state.
+    pub report_state_fnv1a: String,
+    /// FNV-1a hash over the seed, the next pulse, the counts and the
+    /// hashes above: any edit of the record shows.
+    pub state_fnv1a: String,
 }

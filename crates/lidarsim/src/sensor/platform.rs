@@ -10,17 +10,9 @@ use std::sync::Arc;
 
 use glam::{DQuat, EulerRot};
 
+use super::Pose;
 use crate::geometry::{Attitude, DVec3, forward_of, right_of};
 use crate::rng::{Purpose, Stream};
-
-/// Position and attitude of the scanner at one instant.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Pose {
-    /// Scanner position, world metres.
-    pub position_m: DVec3,
-    /// Attitude.
-    pub attitude: Attitude,
-}
 
 /// Amplitudes and frequencies of the attitude sway.
 #[derive(Clone, Debug, PartialEq)]
@@ -122,7 +114,7 @@ pub struct FlightLine {
     /// Sway of this line (`None`: level, steady flight).
     pub sway: Option<Sway>,
     /// Correlated GNSS/IMU errors of this line (empty: none).
-    pub nav_errors: crate::navigation::LineErrors,
+    pub nav_errors: crate::sensor::navigation::LineErrors,
     /// Slow lateral and vertical drift of the flown path (turbulence).
     pub drift: Option<Drift>,
     /// A recorded trajectory replacing the straight line (from a trajectory
