@@ -642,11 +642,11 @@ fn nearest_point(dir: &Path, near: &str) -> Result<Nearest, (u8, String)> {
             format!(
                 "{}: {}",
                 cloud.display(),
-                lidarsim::scene::cloud::describe_las_error(&e)
+                lidarsim::io::cloud::describe_las_error(&e)
             ),
         )
     };
-    let mut reader = lidarsim::scene::cloud::open_las(&cloud)
+    let mut reader = lidarsim::io::cloud::open_las(&cloud)
         .map_err(|why| (1, format!("{}: {why}", cloud.display())))?;
     let mut best: Option<([f64; 3], f64, u16, Option<f64>)> = None;
     loop {
@@ -887,8 +887,8 @@ fn check_las_signature(cloud: &Path) -> Result<(), String> {
 /// say what is wrong in words (a truncated file, a header that promises
 /// more points than the file holds) before any large allocation.
 fn read_cloud(cloud: &Path) -> Result<Vec<lidarsim::render::RenderPoint>, String> {
+    use lidarsim::io::cloud::{describe_las_error, open_las};
     use lidarsim::render::RenderPoint;
-    use lidarsim::scene::cloud::{describe_las_error, open_las};
     let bad = |e: las::Error| format!("{}: {}", cloud.display(), describe_las_error(&e));
     check_las_signature(cloud)?;
     let mut reader = open_las(cloud).map_err(|why| format!("{}: {why}", cloud.display()))?;

@@ -14,7 +14,8 @@ use std::time::Instant;
 
 use lidarsim::accel::{Bvh, RayCaster};
 use lidarsim::geometry::{DVec3, Ray};
-use lidarsim::scene::terrain::{FbmSpec, add_terrain, generate_fbm, read_raster};
+use lidarsim::io::raster::read_raster;
+use lidarsim::scene::terrain::{FbmSpec, add_terrain, generate_fbm};
 use lidarsim::scene::{Scene, SurfaceClass};
 
 fn peak_rss_mb() -> f64 {

@@ -56,6 +56,8 @@ pub mod demo;
 pub mod detection;
 pub mod files;
 pub mod geometry;
+pub mod io;
+pub mod message;
 pub mod output;
 pub mod plan;
 pub mod radiometry;

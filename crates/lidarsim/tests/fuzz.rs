@@ -260,7 +260,7 @@ fn trajectory_csv_never_panics() {
                 } else {
                     Interpolation::Linear
                 };
-                match lidarsim::survey::read_trajectory(&csv, interpolation) {
+                match lidarsim::io::trajectory::read_trajectory(&csv, interpolation) {
                     Ok(lines) => {
                         ok.set(ok.get() + 1);
                         for (start, track) in &lines {
@@ -471,7 +471,7 @@ fn esri_ascii_grids_never_panic_and_errors_name_the_file() {
                 b[at] = v;
             }
             std::fs::write(&path, &b).unwrap();
-            match lidarsim::scene::terrain::read_raster(&path) {
+            match lidarsim::io::raster::read_raster(&path) {
                 Ok(g) => {
                     ok.set(ok.get() + 1);
                     let (c, r) = (g.cols, g.rows);
@@ -510,7 +510,7 @@ fn geotiff_bytes_never_panic_and_errors_name_the_file() {
         .run(&(0..sources.len(), edits(), length(2000)), |(k, e, len)| {
             let b = mutate(&sources[k], &e, 600, len);
             std::fs::write(&path, &b).unwrap();
-            match lidarsim::scene::terrain::read_raster(&path) {
+            match lidarsim::io::raster::read_raster(&path) {
                 Ok(g) => {
                     ok.set(ok.get() + 1);
                     prop_assert!(g.heights.len() == g.cols * g.rows);

@@ -5,7 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use lidarsim::Survey;
-use lidarsim::scene::terrain::{HeightGrid, read_raster};
+use lidarsim::io::raster::read_raster;
+use lidarsim::scene::terrain::HeightGrid;
 use lidarsim::sim::simulate_to_memory;
 
 fn data(name: &str) -> PathBuf {

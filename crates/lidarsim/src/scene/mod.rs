@@ -10,19 +10,32 @@
 
 pub mod cloud;
 pub mod forest;
-mod gltf_mesh;
-pub mod input;
-mod obj;
 mod polygon;
 pub mod terrain;
 pub mod tree;
 
-pub use gltf_mesh::load_gltf;
-pub use obj::{MeshError, MeshPlacement, glob_match, load_obj};
 pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
 pub use tree::{Crown, Species, TreeSpec, Trunk};
 
 use crate::geometry::{Aabb, DVec3, Ray};
+
+/// Where a mesh goes in the world and what it defaults to.
+#[derive(Clone, Debug)]
+pub struct MeshPlacement {
+    /// Uniform scale applied first.
+    pub scale: f64,
+    /// Rotation about the vertical, radians, applied after scaling.
+    pub rotation_z_rad: f64,
+    /// Translation applied last, m.
+    pub offset_m: DVec3,
+    /// Class for faces whose material and group name say nothing.
+    pub default_class: SurfaceClass,
+    /// Material for faces before any `usemtl` (a survey material name).
+    pub default_material: Option<Material>,
+    /// Group/object name patterns and their classes (see the module
+    /// documentation).
+    pub class_map: Vec<(String, SurfaceClass)>,
+}
 
 /// Ground-truth class of a surface. It becomes the LAS classification of
 /// the points that surface returns (ASPRS standard classes, LAS 1.4 R15

@@ -20,16 +20,15 @@ use std::path::{Path, PathBuf};
 use crate::canopy::{CanopyConfig, ReturnModel};
 use crate::detection::{DetectorConfig, ReturnSelection};
 use crate::geometry::DVec3;
+use crate::io::obj::load_obj;
+use crate::message::edit_distance;
+pub use crate::message::num;
 use crate::scene::forest::{ForestSpec, generate};
-use crate::scene::input::edit_distance;
 use crate::scene::{
     Material, MeshPlacement, Polygon, Primitive, Scene, Shape, Species, SurfaceClass, TreeSpec,
-    load_obj,
 };
 use crate::sensor::navigation::{ErrorModel, LineErrors, NavigationErrors};
-use crate::sensor::platform::{
-    Drift, FlightLine, Interpolation, Sway, SwayConfig, Track, plan_lines,
-};
+use crate::sensor::platform::{Drift, FlightLine, Interpolation, Sway, SwayConfig, plan_lines};
 use crate::sensor::scanner::{Mirror, MirrorProfile};
 use crate::waveform::{PulseShape, ReceiverConfig, range_to_bin};
 
@@ -390,17 +389,6 @@ fn remove_key(table: &mut toml::Table, path: &KeyPath) -> Option<KeyPath> {
     }
     t.remove(name)?;
     Some(KeyPath(path.0[..=last].to_vec()))
-}
-
-/// A number as messages show it: plainly for ordinary magnitudes, in
-/// exponent form for very large or small ones (`1e300`, not 301 digits).
-pub fn num(v: f64) -> String {
-    let a = v.abs();
-    if v == 0.0 || !v.is_finite() || (1e-4..1e9).contains(&a) {
-        format!("{v}")
-    } else {
-        format!("{v:e}")
-    }
 }
 
 /// Collects problems with their key paths during validation.
@@ -959,187 +947,6 @@ fn check_plan(
     .collect()
 }
 
-/// One row of a trajectory file: time, position, attitude.
-type TrackSample = (f64, DVec3, crate::geometry::Attitude);
-
-/// Reads a trajectory file: CSV with a header naming the columns `time_s`
-/// (or `gps_time_s`), `x_m`, `y_m`, `z_m`, `roll_deg`, `pitch_deg`,
-/// `yaw_deg` and optionally `line` (the format lidarsim writes). Rows of one
-/// `line` value form one flight line; times are seconds, the first row is
-/// the start of the flight. Returns each line's start time and track.
-pub fn read_trajectory(
-    path: &Path,
-    interpolation: Interpolation,
-) -> Result<Vec<(f64, Track)>, String> {
-    let bytes = crate::scene::input::read_input(path, crate::scene::input::MAX_TRAJECTORY_BYTES)
-        .map_err(|e| format!("cannot read trajectory file '{}': {e}", path.display()))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let at = e.utf8_error().valid_up_to();
-        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
-        format!(
-            "'{}' line {line}: not valid UTF-8 (byte {}): a trajectory is a CSV text file",
-            path.display(),
-            at + 1
-        )
-    })?;
-    let mut rows = text
-        .lines()
-        .enumerate()
-        .filter(|(_, l)| !l.trim().is_empty());
-    let Some((_, header)) = rows.next() else {
-        return Err(format!("'{}' is empty", path.display()));
-    };
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    let col = |want: &[&str]| names.iter().position(|n| want.contains(n));
-    let need = [
-        col(&["time_s", "gps_time_s", "time"]),
-        col(&["x_m", "x"]),
-        col(&["y_m", "y"]),
-        col(&["z_m", "z"]),
-        col(&["roll_deg", "roll"]),
-        col(&["pitch_deg", "pitch"]),
-        col(&["yaw_deg", "yaw"]),
-    ];
-    let wanted = [
-        "time_s",
-        "x_m",
-        "y_m",
-        "z_m",
-        "roll_deg",
-        "pitch_deg",
-        "yaw_deg",
-    ];
-    let mut idx = [0usize; 7];
-    for (k, c) in need.iter().enumerate() {
-        match c {
-            Some(i) => idx[k] = *i,
-            None => {
-                return Err(format!(
-                    "'{}' line 1: no column `{}` (the header must name: {})",
-                    path.display(),
-                    wanted[k],
-                    wanted.join(", ")
-                ));
-            }
-        }
-    }
-    let line_col = col(&["line"]);
-    // Consecutive rows of one `line` value, as (line value, samples).
-    let mut segments: Vec<(String, Vec<TrackSample>)> = Vec::new();
-    for (n, row) in rows {
-        let cells: Vec<&str> = row.split(',').map(str::trim).collect();
-        if cells.len() != names.len() {
-            return Err(format!(
-                "'{}' line {}: {} values for the header's {} columns ({}); every row needs one \
-                 value per column",
-                path.display(),
-                n + 1,
-                cells.len(),
-                names.len(),
-                names.join(", ")
-            ));
-        }
-        let value = |k: usize| -> Result<f64, String> {
-            let cell = cells.get(idx[k]).copied().unwrap_or("");
-            cell.parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    format!(
-                        "'{}' line {}: `{}` is '{cell}', not a number",
-                        path.display(),
-                        n + 1,
-                        wanted[k]
-                    )
-                })
-        };
-        let v: Vec<f64> = (0..7).map(value).collect::<Result<_, _>>()?;
-        if let Some(k) = (1..4).find(|&k| v[k].abs() > MAX_COORDINATE_M) {
-            return Err(format!(
-                "'{}' line {}: `{}` is {}, beyond ±{} m",
-                path.display(),
-                n + 1,
-                wanted[k],
-                num(v[k]),
-                num(MAX_COORDINATE_M)
-            ));
-        }
-        if let Some(k) = (4..7).find(|&k| v[k].abs() > 360.0) {
-            return Err(format!(
-                "'{}' line {}: `{}` is {}°, beyond ±360°",
-                path.display(),
-                n + 1,
-                wanted[k],
-                num(v[k])
-            ));
-        }
-        // Line values compare as numbers when they are numbers ("0" = "0.0").
-        let key = line_col
-            .and_then(|i| cells.get(i))
-            .map_or_else(String::new, |s| match s.parse::<f64>() {
-                Ok(v) => v.to_string(),
-                Err(_) => s.to_string(),
-            });
-        let sample = (
-            v[0],
-            DVec3::new(v[1], v[2], v[3]),
-            crate::geometry::Attitude {
-                roll_rad: v[4].to_radians(),
-                pitch_rad: v[5].to_radians(),
-                yaw_rad: v[6].to_radians(),
-            },
-        );
-        match segments.last_mut() {
-            Some((k, samples)) if *k == key => {
-                if sample.0 <= samples[samples.len() - 1].0 {
-                    return Err(format!(
-                        "'{}' line {}: times must increase",
-                        path.display(),
-                        n + 1
-                    ));
-                }
-                samples.push(sample);
-            }
-            Some((_, samples)) if sample.0 <= samples[samples.len() - 1].0 => {
-                return Err(format!(
-                    "'{}' line {}: line '{key}' starts before the previous line ends; \
-                     lines must follow each other in time",
-                    path.display(),
-                    n + 1
-                ));
-            }
-            _ => {
-                if segments.iter().any(|(k, _)| *k == key) {
-                    return Err(format!(
-                        "'{}' line {}: line '{key}' appears again after other lines",
-                        path.display(),
-                        n + 1
-                    ));
-                }
-                segments.push((key, vec![sample]));
-            }
-        }
-    }
-    let t0 = segments
-        .first()
-        .map(|s| s.1[0].0)
-        .ok_or_else(|| format!("'{}' holds no trajectory rows", path.display()))?;
-    segments
-        .into_iter()
-        .map(|(key, samples)| {
-            let start = samples[0].0 - t0;
-            Track::new(&samples, interpolation)
-                .map(|t| (start, t))
-                .ok_or_else(|| {
-                    format!(
-                        "'{}': line '{key}' needs at least two rows with increasing times",
-                        path.display()
-                    )
-                })
-        })
-        .collect()
-}
-
 /// Shortest tree accepted, m (the trunk tapers from breast height, 1.3 m,
 /// to the top, so a tree must be clearly taller than that).
 pub const MIN_TREE_HEIGHT_M: f64 = 2.0;
@@ -1424,7 +1231,7 @@ fn check_terrain(
                     );
                 }
             }
-            match crate::scene::terrain::read_raster(&base.join(file)) {
+            match crate::io::raster::read_raster(&base.join(file)) {
                 Ok(g) => Some(g),
                 Err(e) => {
                     c.err(tp.key("file"), e.to_string());
@@ -1525,14 +1332,15 @@ impl Survey {
     /// generated forests and sway follow the new seed too.
     pub fn load_with_seed(path: &Path, seed: Option<u64>) -> Result<Self, SurveyError> {
         let file = path.display().to_string();
-        let text = crate::scene::input::read_input(path, crate::scene::input::MAX_SURVEY_BYTES)
-            .map_err(|e| SurveyError {
+        let text = crate::io::input::read_input(path, crate::io::input::MAX_SURVEY_BYTES).map_err(
+            |e| SurveyError {
                 diagnostics: vec![Diagnostic::file_level(
                     &file,
                     0,
                     format!("cannot read the survey file: {e}"),
                 )],
-            })?;
+            },
+        )?;
         let text = String::from_utf8(text).map_err(|e| {
             let offset = e.utf8_error().valid_up_to();
             let prefix = String::from_utf8_lossy(&e.as_bytes()[..offset]).into_owned();
@@ -2343,13 +2151,13 @@ impl Survey {
                 .and_then(|e| e.to_str())
                 .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
             let loaded = if is_gltf {
-                crate::scene::load_gltf(&full, &placement, &materials, &mut scene)
+                crate::io::gltf::load_gltf(&full, &placement, &materials, &mut scene)
             } else {
                 load_obj(&full, &placement, &materials, &mut scene)
             };
             if let Err(e) = loaded {
                 let key = match &e {
-                    crate::scene::MeshError::UnmatchedClassPattern { pattern, .. } => {
+                    crate::io::obj::MeshError::UnmatchedClassPattern { pattern, .. } => {
                         mp.key("classes").key(pattern)
                     }
                     _ => mp.key("file"),
@@ -2415,7 +2223,7 @@ impl Survey {
                 class,
             };
             if let Err(e) =
-                crate::scene::cloud::load_point_cloud(&base.join(file), &placement, &mut scene)
+                crate::io::cloud::load_point_cloud(&base.join(file), &placement, &mut scene)
             {
                 c.err(pp.key("file"), e.to_string());
             }
@@ -2597,7 +2405,7 @@ impl Survey {
             None => Vec::new(),
             Some(file) => {
                 let full = base.join(file);
-                match read_trajectory(&full, interpolation) {
+                match crate::io::trajectory::read_trajectory(&full, interpolation) {
                     Ok(t) => t,
                     Err(e) => {
                         c.err(pp.key("trajectory_file"), e);

@@ -6,6 +6,8 @@
 //! raster, cloud, trajectory or survey would otherwise be read without end.
 
 use std::io;
+
+use crate::message::edit_distance;
 use std::path::{Path, PathBuf};
 
 /// Largest survey file read, bytes.
@@ -82,32 +84,9 @@ fn similar_name(path: &Path) -> Option<PathBuf> {
         .map(|(_, n)| path.with_file_name(n))
 }
 
-/// Levenshtein distance between two short strings.
-pub fn edit_distance(a: &str, b: &str) -> usize {
-    let b: Vec<char> = b.chars().collect();
-    let mut row: Vec<usize> = (0..=b.len()).collect();
-    for (i, ca) in a.chars().enumerate() {
-        let mut prev = row[0];
-        row[0] = i + 1;
-        for (j, cb) in b.iter().enumerate() {
-            let cur = row[j + 1];
-            row[j + 1] = (prev + usize::from(ca != *cb)).min(row[j] + 1).min(cur + 1);
-            prev = cur;
-        }
-    }
-    row[b.len()]
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn edit_distances_of_known_pairs() {
-        assert_eq!(edit_distance("kitten", "sitting"), 3);
-        assert_eq!(edit_distance("hosue.obj", "house.obj"), 2);
-        assert_eq!(edit_distance("", "abc"), 3);
-    }
 
     #[test]
     fn devices_directories_and_typos_are_named() {

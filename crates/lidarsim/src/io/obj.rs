@@ -21,8 +21,8 @@ use std::collections::HashMap;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
 
-use super::{Material, Primitive, Scene, Shape, SurfaceClass, Triangle};
 use crate::geometry::{DMat3, DVec3};
+use crate::scene::{Material, MeshPlacement, Primitive, Scene, Shape, SurfaceClass, Triangle};
 
 /// Why a mesh could not be loaded.
 #[derive(Debug, thiserror::Error)]
@@ -168,24 +168,6 @@ pub fn first_bad_line(text: &[u8]) -> Option<(usize, String)> {
 
 const SURVEY_LIBRARY: &str = "<survey materials>";
 
-/// Where a mesh goes in the world and what it defaults to.
-#[derive(Clone, Debug)]
-pub struct MeshPlacement {
-    /// Uniform scale applied first.
-    pub scale: f64,
-    /// Rotation about the vertical, radians, applied after scaling.
-    pub rotation_z_rad: f64,
-    /// Translation applied last, m.
-    pub offset_m: DVec3,
-    /// Class for faces whose material and group name say nothing.
-    pub default_class: SurfaceClass,
-    /// Material for faces before any `usemtl` (a survey material name).
-    pub default_material: Option<Material>,
-    /// Group/object name patterns and their classes (see the module
-    /// documentation).
-    pub class_map: Vec<(String, SurfaceClass)>,
-}
-
 /// Whether `name` matches `pattern`, where `*` stands for any run of
 /// characters (possibly empty) and everything else for itself.
 pub fn glob_match(pattern: &str, name: &str) -> bool {
@@ -257,7 +239,9 @@ fn parse_with_tobj(
     }
     let mut mtl_errors = Vec::new();
     for (line, lib) in &libraries {
-        if let Err(e) = super::input::check_input(&base.join(lib), super::input::MAX_INPUT_BYTES) {
+        if let Err(e) =
+            crate::io::input::check_input(&base.join(lib), crate::io::input::MAX_INPUT_BYTES)
+        {
             mtl_errors.push(MeshError::MaterialLibrary {
                 path: path.to_path_buf(),
                 line: *line,
@@ -464,12 +448,12 @@ pub fn load_obj(
     survey_materials: &HashMap<String, Material>,
     scene: &mut Scene,
 ) -> Result<(usize, usize), MeshError> {
-    let text = super::input::read_input(path, super::input::MAX_INPUT_BYTES).map_err(|source| {
-        MeshError::Read {
+    let text = crate::io::input::read_input(path, crate::io::input::MAX_INPUT_BYTES).map_err(
+        |source| MeshError::Read {
             path: path.to_path_buf(),
             source,
-        }
-    })?;
+        },
+    )?;
     let base = path.parent().unwrap_or(Path::new("."));
     // Plain files (vertices, triangles, groups) take the fast reader; the
     // others, and every file with a problem to report, the OBJ parser.

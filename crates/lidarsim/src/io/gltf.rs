@@ -23,9 +23,9 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::obj::{MeshError, MeshPlacement, class_from_name, glob_match, mapped_class};
-use super::{Material, Primitive, Scene, Shape, Triangle};
+use super::obj::{MeshError, class_from_name, glob_match, mapped_class};
 use crate::geometry::{DMat3, DVec3};
+use crate::scene::{Material, MeshPlacement, Primitive, Scene, Shape, Triangle};
 use glam::DMat4;
 
 /// glTF (x, y, z) → world (x, −z, y).
@@ -69,13 +69,12 @@ pub fn load_gltf(
         path: path.to_path_buf(),
         reason,
     };
-    let bytes =
-        super::input::read_input(path, super::input::MAX_INPUT_BYTES).map_err(|source| {
-            MeshError::Read {
-                path: path.to_path_buf(),
-                source,
-            }
-        })?;
+    let bytes = crate::io::input::read_input(path, crate::io::input::MAX_INPUT_BYTES).map_err(
+        |source| MeshError::Read {
+            path: path.to_path_buf(),
+            source,
+        },
+    )?;
     let is_glb = path
         .extension()
         .and_then(|e| e.to_str())
@@ -105,7 +104,7 @@ pub fn load_gltf(
                 .parent()
                 .unwrap_or(Path::new("."))
                 .join(percent_decode(uri));
-            let len = super::input::check_input(&file, super::input::MAX_INPUT_BYTES)
+            let len = crate::io::input::check_input(&file, crate::io::input::MAX_INPUT_BYTES)
                 .map_err(|e| fail(format!("cannot load its buffer '{uri}': {e}")))?;
             if len < buffer.length() as u64 {
                 return Err(fail(format!(

@@ -1,0 +1,205 @@
+//! LAS/LAZ point clouds read into scene voxels (see [`crate::scene::cloud`]
+//! for what a voxel is), and the LAS reader's errors in words.
+
+use std::path::{Path, PathBuf};
+
+use crate::geometry::{Aabb, DVec3};
+use crate::scene::cloud::{CloudPlacement, MAX_VOXELS, Voxel};
+use crate::scene::{Primitive, Scene, Shape, SurfaceClass};
+
+/// Why a point cloud could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum CloudError {
+    /// The LAS/LAZ reader failed.
+    #[error("cannot read point cloud '{path}': {reason}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The reader's message.
+        reason: String,
+    },
+    /// The file holds no point.
+    #[error("'{path}' holds no point")]
+    Empty {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Too many voxels for memory.
+    #[error(
+        "'{path}' gives {voxels} voxels of {voxel_m} m, more than the limit of {limit}; use a \
+         larger voxel_m"
+    )]
+    TooMany {
+        /// The file.
+        path: PathBuf,
+        /// Voxels found.
+        voxels: usize,
+        /// Edge length, m.
+        voxel_m: f64,
+        /// The limit.
+        limit: usize,
+    },
+}
+
+/// A LAS reader error in words: a truncated file, a header pointing
+/// outside the file, or the reader's own message.
+pub fn describe_las_error(e: &las::Error) -> String {
+    match e {
+        las::Error::Io(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+            "the file ends early: it is truncated or not a LAS file".to_string()
+        }
+        las::Error::Io(io) if io.kind() == std::io::ErrorKind::InvalidInput => {
+            "its header points outside the file (point count or offsets too large)".to_string()
+        }
+        _ => e.to_string(),
+    }
+}
+
+/// Opens a LAS or LAZ file for reading, after checking the header's point
+/// count against the file's size (a LAS point takes its record length; LAZ
+/// can pack a smooth cloud into less than a byte per point, so it is not
+/// checked and its reader stops at the end of the data): a header that
+/// promises more points than the file holds is refused before any large
+/// allocation. Errors say what is wrong, without the path.
+pub fn open_las(path: &Path) -> Result<las::Reader, String> {
+    let size = crate::io::input::check_input(path, crate::io::input::MAX_INPUT_BYTES)
+        .map_err(|e| e.to_string())?;
+    let reader = las::Reader::from_path(path).map_err(|e| describe_las_error(&e))?;
+    let header = reader.header();
+    let t = header.transforms();
+    for (axis, tr) in [("x", t.x), ("y", t.y), ("z", t.z)] {
+        if !(tr.scale.is_finite() && tr.scale != 0.0 && tr.offset.is_finite()) {
+            return Err(format!(
+                "the header's {axis} scale factor is {} and offset {}: coordinates are stored as \
+                 integers times a non-zero scale plus the offset (LAS 1.4 R15, Table 4)",
+                tr.scale, tr.offset
+            ));
+        }
+    }
+    let count = header.number_of_points();
+    let record = u64::from(header.point_format().len());
+    let compressed = header.point_format().is_compressed
+        || header.vlrs().iter().any(|v| v.user_id == "laszip encoded")
+        || path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
+    match count.checked_mul(record) {
+        Some(bytes) if bytes <= size || compressed => Ok(reader),
+        _ => Err(format!(
+            "the header counts {count} points of {record} bytes, more than the file's {size} \
+             bytes hold: it is truncated or its header is wrong"
+        )),
+    }
+}
+
+/// Loads a LAS or LAZ file into `scene` as voxels of one new object;
+/// returns (points read, voxels added).
+pub fn load_point_cloud(
+    path: &Path,
+    placement: &CloudPlacement,
+    scene: &mut Scene,
+) -> Result<(u64, usize), CloudError> {
+    let bad = |e: las::Error| CloudError::Read {
+        path: path.to_path_buf(),
+        reason: describe_las_error(&e),
+    };
+    let mut reader = open_las(path).map_err(|reason| CloudError::Read {
+        path: path.to_path_buf(),
+        reason,
+    })?;
+    let mut not_finite = 0u64;
+    let v = placement.voxel_m;
+    // (voxel index, classification) of every point, then sorted and
+    // grouped: no hash map of counters.
+    let mut cells: Vec<([i64; 3], u8)> = Vec::new();
+    let mut read = 0u64;
+    loop {
+        let batch = reader.read_points(1 << 20).map_err(bad)?;
+        if batch.is_empty() {
+            break;
+        }
+        for p in batch.points() {
+            let p = p.map_err(bad)?;
+            read += 1;
+            let q = DVec3::new(p.x, p.y, p.z) + placement.offset_m;
+            if !q.is_finite() {
+                not_finite += 1;
+                continue;
+            }
+            let cell = (q / v).floor();
+            // Beyond 2^52 cells the indices would no longer be exact.
+            if cell.abs().max_element() > 4.5e15 {
+                return Err(CloudError::Read {
+                    path: path.to_path_buf(),
+                    reason: format!(
+                        "the point at ({}, {}, {}) m is more than 2^52 voxels of {v} m from the \
+                         origin: use a larger voxel_m",
+                        q.x, q.y, q.z
+                    ),
+                });
+            }
+            let key = [cell.x as i64, cell.y as i64, cell.z as i64];
+            cells.push((key, u8::from(p.classification)));
+        }
+    }
+    if cells.is_empty() && not_finite > 0 {
+        return Err(CloudError::Read {
+            path: path.to_path_buf(),
+            reason: format!(
+                "none of its {not_finite} points has finite coordinates (check the header's \
+                 scale and offset)"
+            ),
+        });
+    }
+    if cells.is_empty() {
+        return Err(CloudError::Empty {
+            path: path.to_path_buf(),
+        });
+    }
+    cells.sort_unstable();
+    let object = scene.add_object(format!("point_cloud:{}", path.display()));
+    let mut added = 0usize;
+    let mut start = 0;
+    while start < cells.len() {
+        let key = cells[start].0;
+        let mut end = start;
+        // Within a voxel the entries are sorted by code: count runs.
+        let (mut best, mut best_n) = (cells[start].1, 0usize);
+        while end < cells.len() && cells[end].0 == key {
+            let code = cells[end].1;
+            let run_start = end;
+            while end < cells.len() && cells[end].0 == key && cells[end].1 == code {
+                end += 1;
+            }
+            if end - run_start > best_n {
+                (best, best_n) = (code, end - run_start);
+            }
+        }
+        start = end;
+        added += 1;
+        if added > MAX_VOXELS {
+            return Err(CloudError::TooMany {
+                path: path.to_path_buf(),
+                voxels: added,
+                voxel_m: v,
+                limit: MAX_VOXELS,
+            });
+        }
+        let min = DVec3::new(key[0] as f64, key[1] as f64, key[2] as f64) * v;
+        scene.primitives.push(Primitive {
+            shape: Shape::Voxel(Voxel {
+                bounds: Aabb {
+                    min,
+                    max: min + DVec3::splat(v),
+                },
+            }),
+            material: placement.material,
+            class: placement
+                .class
+                .unwrap_or_else(|| SurfaceClass::from_asprs(best)),
+            object,
+        });
+    }
+    Ok((read, added))
+}

@@ -1,0 +1,11 @@
+//! Readers: the files a survey names, turned into parts of the scene or
+//! into flight lines. Every reader takes only regular files within a size
+//! bound ([`input`]) and names the file, and where meaningful the line, of
+//! each problem.
+
+pub mod cloud;
+pub mod gltf;
+pub mod input;
+pub mod obj;
+pub mod raster;
+pub mod trajectory;
