@@ -12,9 +12,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
 use lidarsim::Survey;
-use lidarsim::accel::Bvh;
 use lidarsim::plan::plan;
-use lidarsim::run::{RunOptions, Summary, run_survey_to_dir};
+use lidarsim::run::{RunOptions, Summary, run_world_to_dir};
+use lidarsim::world::{World, load};
 
 mod cpu;
 
@@ -175,7 +175,7 @@ enum Command {
         work_dir: Option<PathBuf>,
         /// Pulses of the flight line (default: the benchmark's 500 000;
         /// fewer for profiling).
-        #[arg(long, default_value_t = lidarsim::bench::PULSES)]
+        #[arg(long, default_value_t = lidarsim_bench::PULSES)]
         pulses: u64,
     },
 }
@@ -244,12 +244,16 @@ fn main() -> ExitCode {
                     return fail(1, &list.join("\n"));
                 }
             };
+            let world = match World::build(&survey) {
+                Ok(w) => w,
+                Err(e) => return fail_survey(&e),
+            };
             let how = How {
                 resume: false,
                 overwrite,
                 no_space_check,
             };
-            simulate(survey, &output, threads, how)
+            simulate(&survey, &world, &output, threads, how)
         }
         Command::Run {
             survey,
@@ -275,17 +279,16 @@ fn main() -> ExitCode {
                     ),
                 );
             }
-            match Survey::load_with_seed(&path, seed) {
-                Ok(s) => {
-                    let how = How {
-                        resume: resuming,
-                        overwrite,
-                        no_space_check,
-                    };
-                    simulate(s, &output, threads, how)
-                }
-                Err(e) => fail_survey(&e),
-            }
+            let (survey, world) = match load(&path, seed) {
+                Ok(loaded) => loaded,
+                Err(e) => return fail_survey(&e),
+            };
+            let how = How {
+                resume: resuming,
+                overwrite,
+                no_space_check,
+            };
+            simulate(&survey, &world, &output, threads, how)
         }
         Command::Render {
             cloud,
@@ -321,10 +324,10 @@ fn main() -> ExitCode {
             Ok(()) => ExitCode::SUCCESS,
             Err(msg) => fail(1, &msg),
         },
-        Command::Check { survey, output } => match Survey::load(&survey) {
-            Ok(s) => {
-                warn(&s);
-                check(&s, &output);
+        Command::Check { survey, output } => match load(&survey, None) {
+            Ok((s, w)) => {
+                warn(&s, &w);
+                check(&s, &w, &output);
                 ExitCode::SUCCESS
             }
             Err(e) => fail_survey(&e),
@@ -341,7 +344,7 @@ fn bench(
     work_dir: Option<PathBuf>,
     pulses: u64,
 ) -> Result<(), String> {
-    use lidarsim::bench::{BenchScene, export as export_scene, measure};
+    use lidarsim_bench::{BenchScene, export as export_scene, measure};
     let scenes: Vec<BenchScene> = if scenes.is_empty() {
         BenchScene::ALL.to_vec()
     } else {
@@ -390,7 +393,7 @@ fn bench(
 /// speed-up of the second run over the first (measured, and at equal CPU
 /// per pulse), whether every run wrote the same LAS, and the median
 /// speed-up over repeated pairs of thread counts.
-fn figure_lines(f: &lidarsim::bench::SceneFigures) -> Vec<String> {
+fn figure_lines(f: &lidarsim_bench::SceneFigures) -> Vec<String> {
     let name = f.scene.name();
     let mut out = vec![
         format!("{name} primitives {}", f.primitives),
@@ -434,9 +437,9 @@ fn figure_lines(f: &lidarsim::bench::SceneFigures) -> Vec<String> {
             "{name} identical_output {}",
             f.runs.iter().all(|r| r.las_hash == a.las_hash)
         ));
-        let pairs = lidarsim::bench::pair_speedups(&f.runs);
+        let pairs = lidarsim_bench::pair_speedups(&f.runs);
         if pairs.len() > 1
-            && let Some(m) = lidarsim::bench::median(&pairs)
+            && let Some(m) = lidarsim_bench::median(&pairs)
         {
             out.push(format!("{name} scaling_pairs {}", pairs.len()));
             out.push(format!("{name} scaling_{ta}_to_{tb}_median {m:.2}"));
@@ -478,10 +481,10 @@ fn source_name(survey: &Survey) -> String {
         .map_or_else(|| "<demo>".to_string(), |p| p.display().to_string())
 }
 
-/// Prints the survey's warnings to standard error.
-fn warn(survey: &Survey) {
+/// Prints the survey's and its world's warnings to standard error.
+fn warn(survey: &Survey, world: &World) {
     let file = source_name(survey);
-    for w in &survey.warnings {
+    for w in &world.warnings_with(survey) {
         note!("warning: {file}: {w}");
     }
 }
@@ -518,13 +521,19 @@ struct How {
     no_space_check: bool,
 }
 
-fn simulate(survey: Survey, output: &Path, threads: Option<usize>, how: How) -> ExitCode {
+fn simulate(
+    survey: &Survey,
+    world: &World,
+    output: &Path,
+    threads: Option<usize>,
+    how: How,
+) -> ExitCode {
     let How {
         resume,
         overwrite,
         no_space_check,
     } = how;
-    warn(&survey);
+    warn(survey, world);
     if survey.output.formats.laz && !resume {
         note!(
             "note: this run writes LAZ, which cannot be continued: if it is stopped, run the \
@@ -536,7 +545,7 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, how: How) -> 
         Some(n) => n,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
-    let total: u64 = survey.lines.iter().map(|l| survey.pulses_of(l)).sum();
+    let total: u64 = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
     let bar = if std::io::stderr().is_terminal() {
         let b = ProgressBar::new(total);
         if let Ok(style) = ProgressStyle::with_template(
@@ -555,10 +564,10 @@ fn simulate(survey: Survey, output: &Path, threads: Option<usize>, how: How) -> 
             hold_until_stopped(done);
         }
     };
-    let name = source_name(&survey);
-    // The survey is not needed afterwards: its scene moves into the BVH.
-    let result = run_survey_to_dir(
+    let name = source_name(survey);
+    let result = run_world_to_dir(
         survey,
+        world,
         output,
         &RunOptions {
             threads,
@@ -693,7 +702,7 @@ fn waveform(
     output: &Path,
 ) -> Result<(), (u8, String)> {
     let survey_path = dir.join("survey.toml");
-    let survey = Survey::load(&survey_path).map_err(|e| (2, e.to_string()))?;
+    let (survey, world) = load(&survey_path, None).map_err(|e| (2, e.to_string()))?;
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
     let prf = survey.scanner.prf_hz;
     // The line and pulse: given, or found from a point's GPS time (and,
@@ -706,7 +715,7 @@ fn waveform(
                 source,
                 gps_time_s: gps,
             } = nearest_point(dir, near)?;
-            let l = survey
+            let l = world
                 .lines
                 .get(usize::from(source).wrapping_sub(1))
                 .ok_or_else(|| {
@@ -715,7 +724,7 @@ fn waveform(
                         format!(
                             "--near: the nearest point has point source ID {source}, but the \
                              survey has flight lines 1 to {}",
-                            survey.lines.len()
+                            world.lines.len()
                         ),
                     )
                 })?;
@@ -728,7 +737,7 @@ fn waveform(
         }
         (None, Some(t)) => {
             let t = t - offset;
-            let l = survey
+            let l = world
                 .lines
                 .iter()
                 .find(|l| t >= l.start_time_s - 0.5 / prf && t < l.start_time_s + l.duration_s())
@@ -741,7 +750,7 @@ fn waveform(
             (l, ((t - l.start_time_s) * prf).round().max(0.0) as u64)
         }
         (None, None) => {
-            let l = survey
+            let l = world
                 .lines
                 .get((line as usize).wrapping_sub(1))
                 .ok_or_else(|| {
@@ -749,7 +758,7 @@ fn waveform(
                         2,
                         format!(
                             "--line {line}: the survey has {} line(s)",
-                            survey.lines.len()
+                            world.lines.len()
                         ),
                     )
                 })?;
@@ -773,8 +782,7 @@ fn waveform(
             ),
         ));
     }
-    let bvh = Bvh::build(survey.scene.clone());
-    let sim = lidarsim::sim::Simulator::new(&survey, &bvh);
+    let sim = lidarsim::sim::Simulator::new(&survey, &world);
     let (plot, scratch) = lidarsim::render::WaveformPlot::of_pulse(&sim, line_ref, k);
     plot.render()
         .save_png(output)
@@ -946,15 +954,14 @@ fn report(s: &Summary, output: &Path) {
     }
 }
 
-fn check(survey: &Survey, output: &Path) {
+fn check(survey: &Survey, world: &World, output: &Path) {
     use lidarsim::budget::{available_memory, estimate, free_bytes, human_bytes};
-    let bvh = Bvh::build(survey.scene.clone());
-    let p = plan(survey, &bvh);
-    for w in lidarsim::plan::warnings(survey, &bvh, &p) {
+    let p = plan(survey, world);
+    for w in lidarsim::plan::warnings(survey, world, &p) {
         note!("warning: {}: {w}", source_name(survey));
     }
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let b = estimate(survey, &survey.scene, threads);
+    let b = estimate(survey, world, threads);
     let (free, memory) = (free_bytes(output), available_memory());
     for s in b.shortfalls(output, free, memory, 1.0) {
         note!(
@@ -964,8 +971,8 @@ fn check(survey: &Survey, output: &Path) {
     }
     say!(
         "survey OK: {} flight line(s), {} scene primitives, seed {}",
-        survey.lines.len(),
-        survey.scene.primitives.len(),
+        world.lines.len(),
+        world.scene().primitives.len(),
         survey.seed
     );
     say!("pulses:               {}", p.pulses);
@@ -1087,7 +1094,7 @@ mod tests {
     /// of CPU per pulse), and the median over two pairs is their mean.
     #[test]
     fn bench_figures_are_computed_from_the_measurements() {
-        use lidarsim::bench::{BenchScene, RunFigures, SceneFigures};
+        use lidarsim_bench::{BenchScene, RunFigures, SceneFigures};
         let run = |threads, seconds: f64, cpu_s: f64, hash| RunFigures {
             threads,
             pulses: 100_000,

@@ -20,6 +20,7 @@ use crate::output::{WAVEFORM_BITS, WDP_HEADER_LEN};
 use crate::scene::{Scene, Shape};
 use crate::survey::Survey;
 use crate::waveform::range_to_bin;
+use crate::world::World;
 
 /// Extra returns per pulse allowed for where crowns cover the ground
 /// (foliage echoes at two depths before the ground echo: 2.28 points per
@@ -156,16 +157,16 @@ fn share_over_scene(survey: &Survey, line: &crate::sensor::platform::FlightLine,
 }
 
 /// Estimates the run of `survey` over `scene` on `threads` threads.
-pub fn estimate(survey: &Survey, scene: &Scene, threads: usize) -> Budget {
+pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
+    let (scene, lines) = (world.scene(), &world.lines[..]);
     let o = &survey.output;
     let f = &o.formats;
-    let pulses: u64 = survey.lines.iter().map(|l| survey.pulses_of(l)).sum();
+    let pulses: u64 = lines.iter().map(|l| survey.pulses_of(l)).sum();
     let cover = crown_cover(scene);
     let extra = EXTRA_RETURNS_UNDER_CROWNS.min(survey.detector.max_returns as f64 - 1.0);
     let per_pulse = 1.0 + cover * extra;
     let b = scene.bounds();
-    let over: f64 = survey
-        .lines
+    let over: f64 = lines
         .iter()
         .map(|l| survey.pulses_of(l) as f64 * share_over_scene(survey, l, b))
         .sum();
@@ -176,7 +177,7 @@ pub fn estimate(survey: &Survey, scene: &Scene, threads: usize) -> Budget {
     } else {
         b.min.abs().max(b.max.abs()).max_element()
     };
-    for l in &survey.lines {
+    for l in lines {
         far = far.max(
             l.start_m
                 .abs()
@@ -185,8 +186,7 @@ pub fn estimate(survey: &Survey, scene: &Scene, threads: usize) -> Budget {
         );
     }
     far += o.offset_m.abs().max_element();
-    let flight_s = survey
-        .lines
+    let flight_s = lines
         .last()
         .map_or(0.0, |l| l.start_time_s + l.duration_s())
         + o.gps_start_time_s.unwrap_or(0.0);
@@ -198,7 +198,7 @@ pub fn estimate(survey: &Survey, scene: &Scene, threads: usize) -> Budget {
             bytes,
         })
     };
-    let las = crate::files::las_settings_for(survey, b);
+    let las = crate::files::las_settings_for(survey, b, lines);
     if f.las {
         let mut s = las.clone();
         if f.las_waveform {
@@ -236,12 +236,11 @@ pub fn estimate(survey: &Survey, scene: &Scene, threads: usize) -> Budget {
         let line = coord + digits(flight_s) + 10 + digits(survey.scanner.max_range_m) + 5;
         add("points.xyz", 140 + points * (line + XYZ_FIXED_BYTES));
     }
-    let rows: u64 = survey
-        .lines
+    let rows: u64 = lines
         .iter()
         .map(|l| (l.duration_s() / o.trajectory_interval_s).floor() as u64 + 1)
         .sum();
-    let row = digits(flight_s) + 7 + coord + 3 * 12 + digits(survey.lines.len() as f64) + 8;
+    let row = digits(flight_s) + 7 + coord + 3 * 12 + digits(lines.len() as f64) + 8;
     for name in [
         "trajectory.csv",
         "trajectory_true.csv",

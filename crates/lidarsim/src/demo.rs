@@ -321,15 +321,17 @@ pub fn demo_survey() -> RawSurvey {
 mod tests {
     use super::*;
     use crate::survey::Survey;
+    use crate::world::World;
 
     #[test]
     fn demo_is_valid_and_round_trips_through_toml() {
         let raw = demo_survey();
         let s = Survey::from_raw(raw.clone(), None).unwrap();
-        assert!(s.scene.primitives.len() > 50);
+        let w = World::build(&s).unwrap();
+        assert!(w.scene().primitives.len() > 50);
         let text = toml::to_string(&raw).unwrap();
-        let again = Survey::from_toml(&text, None).unwrap();
-        assert_eq!(again.scene.primitives.len(), s.scene.primitives.len());
-        assert_eq!(again.lines, s.lines);
+        let again = World::build(&Survey::from_toml(&text, None).unwrap()).unwrap();
+        assert_eq!(again.scene().primitives.len(), w.scene().primitives.len());
+        assert_eq!(again.lines, w.lines);
     }
 }

@@ -5,10 +5,11 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use crate::accel::RayCaster;
 use crate::output::{AtomicFile, LasSettings};
 use crate::sensor::navigation::observed_pose;
+use crate::sensor::platform::FlightLine;
 use crate::survey::Survey;
+use crate::world::World;
 
 /// The point files a survey writes, by final name (`points.wdp` with
 /// full waveforms).
@@ -80,12 +81,16 @@ pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
 /// the survey's scale, the creation date from `SOURCE_DATE_EPOCH` if set
 /// (reproducible files) or today, echo attributes and error vector as extra
 /// bytes, the CRS; point format 6, uncompressed.
-pub fn las_settings(survey: &Survey, caster: &dyn RayCaster) -> LasSettings {
-    las_settings_for(survey, caster.scene().bounds())
+pub fn las_settings(survey: &Survey, world: &World) -> LasSettings {
+    las_settings_for(survey, world.scene().bounds(), &world.lines)
 }
 
 /// [`las_settings`] for a scene with bounds `b`.
-pub fn las_settings_for(survey: &Survey, b: crate::geometry::Aabb) -> LasSettings {
+pub fn las_settings_for(
+    survey: &Survey,
+    b: crate::geometry::Aabb,
+    lines: &[FlightLine],
+) -> LasSettings {
     let origin = survey.output.offset_m;
     let c = origin
         + if b.is_empty() {
@@ -107,8 +112,8 @@ pub fn las_settings_for(survey: &Survey, b: crate::geometry::Aabb) -> LasSetting
         offset_m: [round(c.x), round(c.y), round(origin.z)],
         origin_m: origin.to_array(),
         adjusted_standard_gps_time: survey.output.gps_start_time_s.is_some(),
-        file_source_id: if survey.lines.len() == 1 {
-            (survey.lines[0].index + 1) as u16
+        file_source_id: if lines.len() == 1 {
+            (lines[0].index + 1) as u16
         } else {
             0
         },
@@ -128,10 +133,10 @@ pub fn las_settings_for(survey: &Survey, b: crate::geometry::Aabb) -> LasSetting
 /// speckle — a white Lambertian surface filling the beam head-on at the
 /// closest range a flight line comes to the top of the scene, `(Rn / R)²`
 /// (specification Eq. 2) — and at least 1.
-pub fn digitizer(survey: &Survey, caster: &dyn RayCaster) -> crate::output::Digitizer {
-    let top = caster.scene().bounds();
+pub fn digitizer(survey: &Survey, world: &World) -> crate::output::Digitizer {
+    let top = world.scene().bounds();
     let top_z = if top.is_empty() { 0.0 } else { top.max.z };
-    let closest = survey
+    let closest = world
         .lines
         .iter()
         .map(|l| l.start_m.z.min(l.end_m.z) - top_z)
@@ -150,14 +155,19 @@ pub fn digitizer(survey: &Survey, caster: &dyn RayCaster) -> crate::output::Digi
 /// degrees, line number. `observed` selects the trajectory the GNSS/IMU
 /// measured (biases and correlated errors; the per-pulse white noise is not
 /// in it) instead of the one flown.
-pub fn write_trajectory(survey: &Survey, path: &Path, observed: bool) -> io::Result<()> {
+pub fn write_trajectory(
+    survey: &Survey,
+    lines: &[FlightLine],
+    path: &Path,
+    observed: bool,
+) -> io::Result<()> {
     let mut f = AtomicFile::create(path)?;
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
     let dt = survey.output.trajectory_interval_s;
     let origin = survey.output.offset_m;
     let w = f.writer();
     writeln!(w, "gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line")?;
-    for line in &survey.lines {
+    for line in lines {
         let n = (line.duration_s() / dt).floor() as u64;
         for j in 0..=n {
             let t = j as f64 * dt;

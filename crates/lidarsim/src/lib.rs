@@ -1,25 +1,38 @@
 //! # lidarsim — an airborne LiDAR simulator
 //!
-//! lidarsim flies a virtual aircraft with an oscillating-mirror laser
-//! scanner over a scene of planar polygons and triangle meshes, casts every
+//! lidarsim flies a virtual aircraft or drone with a scanning laser over a
+//! scene of polygons, meshes, terrain, point clouds and trees, casts every
 //! pulse as a bundle of sub-rays, records the returned energy as a full
 //! waveform, detects echoes in it and writes georeferenced point clouds
-//! (LAS 1.4) with ground-truth classes.
+//! (LAS 1.4, LAZ, PLY, XYZ) with ground-truth classes.
 //!
 //! The models follow the project specification, described in
 //! `docs/models.md` of the repository and cited as "specification"; each
 //! module names the equations it implements.
 //!
-//! Data flow, one module per step:
-//! [`survey`] (file → validated [`Survey`] and [`scene::Scene`]) →
-//! [`accel`] (closest hits) ← [`platform`] (pose at `t`) + [`scanner`]
-//! (mirror angle, sub-rays) → [`radiometry`] (Eq. 2) → [`waveform`]
-//! (sampled signal) → [`detection`] (echoes) → [`sim`] (georeferencing,
-//! classes, parallel blocks) → [`output`] (LAS, XYZ). [`run`] ties a whole
-//! run to an output directory; [`plan`] predicts swath and density.
+//! ## The pipeline
+//!
+//! 1. [`survey`]: a TOML file read and checked into a [`Survey`] — settings
+//!    only, every problem reported at its file, line and key.
+//! 2. [`world`]: the scene built from the files the survey names (readers
+//!    in [`io`], primitives in [`scene`]), indexed once ([`accel`]), its
+//!    forests placed on the ground and its flight lines planned over it.
+//! 3. [`sim`]: pulse by pulse, the sensor ([`sensor`]: platform pose,
+//!    navigation errors, scanner, beam sub-rays) casts rays into the
+//!    index; [`canopy`] attenuates them through crowns, [`radiometry`]
+//!    gives their power (specification, Eq. 2), [`waveform`] samples the
+//!    signal and [`detection`] finds echoes, which are georeferenced.
+//!    Blocks of pulses run in parallel and are written in pulse order.
+//! 4. [`output`]: point and waveform files; [`run`] ties a whole run to an
+//!    output directory (resume, budget, summary, report).
+//!
+//! [`plan`] predicts swath and density, [`budget`] disk and memory,
+//! [`report`] and [`render`] draw what a run wrote.
+//!
+//! ## Example
 //!
 //! ```
-//! use lidarsim::{Survey, accel::Bvh, output::MemorySink, sim::Simulator};
+//! use lidarsim::{Survey, World, output::MemorySink, sim::Simulator};
 //!
 //! let text = r#"
 //! [scanner]
@@ -36,10 +49,11 @@
 //! vertices_m = [[-200, -200, 0], [200, -200, 0], [200, 200, 0], [-200, 200, 0]]
 //! "#;
 //! let survey = Survey::from_toml(text, None).unwrap();
-//! let bvh = Bvh::build(survey.scene.clone());
-//! let sim = Simulator::new(&survey, &bvh);
+//! let world = World::build(&survey).unwrap();
+//! let sim = Simulator::new(&survey, &world);
 //! let mut points = MemorySink::default();
 //! let counts = sim.run(1, &mut [&mut points], &|_| {}).unwrap();
+//! // 40 m at 50 m/s and 20 kHz.
 //! assert_eq!(counts.pulses, 16_000);
 //! // One echo per pulse from a plane, all of them on it.
 //! assert_eq!(points.points.len() as u64, counts.pulses);
@@ -49,7 +63,6 @@
 #![deny(missing_docs)]
 
 pub mod accel;
-pub mod bench;
 pub mod budget;
 pub mod canopy;
 pub mod demo;
@@ -71,5 +84,7 @@ pub mod sim;
 pub mod summary;
 pub mod survey;
 pub mod waveform;
+pub mod world;
 
 pub use survey::Survey;
+pub use world::World;

@@ -12,8 +12,8 @@ use serde::Serialize;
 
 use crate::accel::RayCaster;
 use crate::geometry::{Aabb, DVec3, Ray, SPEED_OF_LIGHT_MPS};
-use crate::scene::SurfaceClass;
 use crate::survey::Survey;
+use crate::world::World;
 
 /// Expected figures of one flight line.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -55,37 +55,13 @@ pub struct Plan {
     pub flight_time_s: f64,
 }
 
-/// Height of the ground below `p` (ground, road or water surfaces; any
-/// surface if none of those lies below; `z = 0` if nothing does).
-pub fn ground_below(caster: &dyn RayCaster, p: DVec3) -> f64 {
-    let ray = Ray {
-        origin: p,
-        dir: -DVec3::Z,
-    };
-    let ground = |prim: &crate::scene::Primitive| {
-        matches!(
-            prim.class,
-            SurfaceClass::Ground | SurfaceClass::Road | SurfaceClass::Water
-        )
-    };
-    caster
-        .closest_hit_where(&ray, 0.0, f64::INFINITY, &ground)
-        .or_else(|| caster.closest_hit(&ray, 0.0, f64::INFINITY))
-        .map_or(0.0, |h| p.z - h.t)
-}
-
 /// A place along `line` where ground (ground, road or water) lies above
 /// the sensor, and how far above: sampled at 17 points along the line.
 fn ground_above(
     caster: &dyn RayCaster,
     line: &crate::sensor::platform::FlightLine,
 ) -> Option<(DVec3, f64)> {
-    let ground = |prim: &crate::scene::Primitive| {
-        matches!(
-            prim.class,
-            SurfaceClass::Ground | SurfaceClass::Road | SurfaceClass::Water
-        )
-    };
+    let ground = |prim: &crate::scene::Primitive| prim.class.is_ground();
     (0..=16).find_map(|k| {
         let p = line
             .pose_at(line.duration_s() * f64::from(k) / 16.0)
@@ -100,13 +76,14 @@ fn ground_above(
     })
 }
 
-/// Computes the plan of `survey` over the scene of `caster`.
-pub fn plan(survey: &Survey, caster: &dyn RayCaster) -> Plan {
+/// Computes the plan of `survey` over its world.
+pub fn plan(survey: &Survey, world: &World) -> Plan {
+    let caster = world.index();
     let s = &survey.scanner;
     let mut lines = Vec::new();
-    for line in &survey.lines {
+    for line in &world.lines {
         let mid = (line.start_m + line.end_m) * 0.5;
-        let h = (mid.z - ground_below(caster, mid)).max(0.0);
+        let h = (mid.z - crate::accel::ground_below(caster, mid)).max(0.0);
         let w = 2.0 * h * s.mirror.scan_half_angle_rad.tan();
         let pulses = survey.pulses_of(line);
         // Angular step between pulses at nadir for a triangle mirror is
@@ -140,7 +117,7 @@ pub fn plan(survey: &Survey, caster: &dyn RayCaster) -> Plan {
             lines.iter().map(|l| f(l) * l.pulses as f64).sum::<f64>() / pulses as f64
         }
     };
-    let flight_time_s = survey
+    let flight_time_s = world
         .lines
         .last()
         .map_or(0.0, |l| l.start_time_s + l.duration_s());
@@ -166,7 +143,8 @@ pub fn plan(survey: &Survey, caster: &dyn RayCaster) -> Plan {
 ///   which pulse an echo belongs to without multiple-time-around processing;
 /// * swaths that miss the scene's bounding box (no pulse of that line can
 ///   hit anything), for some lines or for all of them.
-pub fn warnings(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> Vec<String> {
+pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
+    let caster = world.index();
     let s = &survey.scanner;
     let theta = s.mirror.scan_half_angle_rad;
     let mut out = Vec::new();
@@ -174,7 +152,7 @@ pub fn warnings(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> Vec<Str
     let scene = caster.scene().bounds();
     let mut missing = Vec::new();
     let mut swaths = Aabb::EMPTY;
-    for (line, lp) in survey.lines.iter().zip(&plan.lines) {
+    for (line, lp) in world.lines.iter().zip(&plan.lines) {
         let n = lp.line;
         if let Some((p, above)) = ground_above(caster, line) {
             out.push(format!(
@@ -249,7 +227,7 @@ pub fn warnings(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> Vec<Str
             ));
         }
     }
-    if !missing.is_empty() && !survey.lines.is_empty() {
+    if !missing.is_empty() && !world.lines.is_empty() {
         let scene_text = if scene.is_empty() {
             "the scene is empty".to_string()
         } else {
@@ -258,7 +236,7 @@ pub fn warnings(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> Vec<Str
                 scene.min.x, scene.max.x, scene.min.y, scene.max.y
             )
         };
-        if missing.len() == survey.lines.len() {
+        if missing.len() == world.lines.len() {
             out.push(format!(
                 "no pulse can hit the scene: the swaths of the flight lines cover x {:.1} to \
                  {:.1} m, y {:.1} to {:.1} m, but {scene_text}",
@@ -279,7 +257,6 @@ pub fn warnings(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> Vec<Str
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::Bvh;
 
     fn warnings_of(scanner: &str, line_x_m: f64, height_m: f64) -> Vec<String> {
         let text = format!(
@@ -290,9 +267,9 @@ mod tests {
              [-500, 500, 0]]\n"
         );
         let survey = Survey::from_toml(&text, None).unwrap();
-        let bvh = Bvh::build(survey.scene.clone());
-        let p = plan(&survey, &bvh);
-        warnings(&survey, &bvh, &p)
+        let world = World::build(&survey).unwrap();
+        let p = plan(&survey, &world);
+        warnings(&survey, &world, &p)
     }
 
     #[test]

@@ -21,6 +21,7 @@ use crate::render::{
     ColorBy, Image, Palette, RenderPoint, Series, WaveformPlot, class_color, fixed, framed,
     hole_source, no_data,
 };
+use crate::sensor::platform::FlightLine;
 use crate::summary::Summary;
 use crate::survey::Survey;
 
@@ -583,11 +584,10 @@ fn ordinal(n: usize) -> String {
 /// For each flight line, about [`FLIGHT_SAMPLES`] over the whole survey:
 /// the time since the survey's start and the time since the line's start,
 /// s (both ends of the line included).
-fn flight_samples(survey: &Survey) -> Vec<(&crate::sensor::platform::FlightLine, Vec<(f64, f64)>)> {
-    let total: f64 = survey.lines.iter().map(|l| l.duration_s()).sum();
+fn flight_samples(lines: &[FlightLine]) -> Vec<(&FlightLine, Vec<(f64, f64)>)> {
+    let total: f64 = lines.iter().map(|l| l.duration_s()).sum();
     let dt = (total / FLIGHT_SAMPLES as f64).max(1e-6);
-    survey
-        .lines
+    lines
         .iter()
         .map(|l| {
             let d = l.duration_s();
@@ -623,8 +623,8 @@ const SERIES_COLORS: [[u8; 3]; 3] = [[31, 119, 180], [214, 39, 40], [44, 160, 44
 /// the survey's start (specification Fig. 10), one panel each; yaw less
 /// the line's heading, so that lines flown in opposite directions show
 /// their sway on one scale.
-pub fn attitude_plot(survey: &Survey) -> Image {
-    let samples = flight_samples(survey);
+pub fn attitude_plot(lines: &[FlightLine]) -> Image {
+    let samples = flight_samples(lines);
     let names = [
         "ROLL (OMEGA) DEG",
         "PITCH (PHI) DEG",
@@ -664,8 +664,8 @@ pub fn attitude_plot(survey: &Survey) -> Image {
 /// per-pulse white noise) minus the true one against the time since the
 /// survey's start: position x, y, z (m) in one picture and roll, pitch,
 /// yaw (degrees) in the other.
-pub fn trajectory_error_plots(survey: &Survey) -> (Image, Image) {
-    let samples = flight_samples(survey);
+pub fn trajectory_error_plots(survey: &Survey, lines: &[FlightLine]) -> (Image, Image) {
+    let samples = flight_samples(lines);
     let diffs: Vec<Vec<(f64, [f64; 6])>> = samples
         .iter()
         .map(|(l, ts)| {
@@ -717,6 +717,7 @@ pub fn trajectory_error_plots(survey: &Survey) -> (Image, Image) {
 /// The whole page.
 pub fn html(
     survey: &Survey,
+    lines: &[FlightLine],
     summary: &Summary,
     sink: &ReportSink,
     waveforms: &[(String, WaveformPlot)],
@@ -754,7 +755,7 @@ pub fn html(
         s.divergence_rad * 1e3,
         s.subrays,
         pulse_words(&survey.receiver.pulse),
-        survey.lines.len(),
+        lines.len(),
         summary.scene_primitives
     );
     let _ = write!(h, "<h2>Summary</h2><table>");
@@ -860,7 +861,7 @@ pub fn html(
         mean,
         img_tag(&density, "point density")?
     );
-    flight_section(&mut h, survey, sink)?;
+    flight_section(&mut h, survey, lines, sink)?;
     if !waveforms.is_empty() {
         let _ = write!(h, "<h2>Sample waveforms</h2>");
         for (title, plot) in waveforms {
@@ -878,8 +879,13 @@ pub fn html(
 
 /// The flight: attitude against time and, with navigation errors, the
 /// observed minus true trajectory and the points' georeferencing errors.
-fn flight_section(h: &mut String, survey: &Survey, sink: &ReportSink) -> io::Result<()> {
-    if survey.lines.is_empty() {
+fn flight_section(
+    h: &mut String,
+    survey: &Survey,
+    lines: &[FlightLine],
+    sink: &ReportSink,
+) -> io::Result<()> {
+    if lines.is_empty() {
         return Ok(());
     }
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
@@ -893,7 +899,7 @@ fn flight_section(h: &mut String, survey: &Survey, sink: &ReportSink) -> io::Res
         "<h2>Flight</h2><p>Attitude of the aircraft as flown (roll ω, pitch φ, and yaw κ less \
          the line's heading, degrees) against the time since the survey's start ({clock}); \
          the turns between flight lines are left out.</p>{}",
-        img_tag(&attitude_plot(survey), "attitude against time")?
+        img_tag(&attitude_plot(lines), "attitude against time")?
     );
     if survey.navigation.is_zero() {
         let _ = write!(
@@ -903,7 +909,7 @@ fn flight_section(h: &mut String, survey: &Survey, sink: &ReportSink) -> io::Res
         );
         return Ok(());
     }
-    let (position, attitude) = trajectory_error_plots(survey);
+    let (position, attitude) = trajectory_error_plots(survey, lines);
     let _ = write!(
         h,
         "<h3>Observed − true trajectory</h3><p>What the GNSS/IMU measured minus the path \

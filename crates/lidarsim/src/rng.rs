@@ -33,8 +33,14 @@ pub enum Purpose {
     Navigation = 6,
     /// White navigation, ranging and encoder noise of one pulse.
     Measurement = 7,
-    /// The sub-ray pattern of one pulse and its turn about the beam axis.
+    /// The sub-ray pattern of one pulse.
     Beam = 8,
+    /// The seed of a `[[tree]]` entry without one (its whorl turn).
+    TreeSeed = 9,
+    /// The seed of a `[[forest]]` entry without one.
+    ForestSeed = 10,
+    /// The seed of a generated `[[terrain]]` without one.
+    TerrainSeed = 11,
     /// Spare purpose for tests and user extensions.
     Test = 0xFFFF,
 }
@@ -47,6 +53,21 @@ pub fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
+}
+
+/// The seed of entry `index` of a survey table that names none, derived
+/// from the survey's `seed` for `purpose` ([`Purpose::TreeSeed`],
+/// [`Purpose::ForestSeed`] or [`Purpose::TerrainSeed`]; each combines the
+/// two in its own fixed way, so that surveys keep their trees, stands and
+/// terrains).
+pub fn entry_seed(seed: u64, purpose: Purpose, index: usize) -> u64 {
+    let i = index as u64;
+    match purpose {
+        Purpose::TreeSeed => mix64(seed ^ i.wrapping_mul(0x9E37_79B9)),
+        Purpose::ForestSeed => mix64(seed.wrapping_add(0xF0_2E57 + i)),
+        Purpose::TerrainSeed => mix64(seed.wrapping_add(0x7E_4A1 + i)),
+        other => mix64(seed ^ (other as u64).wrapping_mul(GOLDEN) ^ i),
+    }
 }
 
 /// A deterministic random stream for one `(seed, line, pulse, purpose)` key.

@@ -30,6 +30,7 @@ use crate::sensor::platform::{FlightLine, LineFrame};
 use crate::sensor::scanner::Mirror;
 use crate::survey::Survey;
 use crate::waveform::{Receiver, Return, Waveform};
+use crate::world::World;
 
 /// ASPRS class of an echo no surface contributed to (receiver noise).
 pub const NOISE_CLASS: u8 = 7;
@@ -244,6 +245,7 @@ impl Scratch {
 pub struct Simulator<'a> {
     survey: &'a Survey,
     caster: &'a dyn RayCaster,
+    lines: &'a [FlightLine],
     receiver: Receiver,
     detector: Detector,
     beam: Beam,
@@ -265,12 +267,13 @@ pub struct Simulator<'a> {
 impl<'a> Simulator<'a> {
     /// Prepares the receiver, detector and beam pattern of `survey` over the
     /// scene indexed by `caster`.
-    pub fn new(survey: &'a Survey, caster: &'a dyn RayCaster) -> Self {
+    pub fn new(survey: &'a Survey, world: &'a World) -> Self {
         let receiver = Receiver::new(survey.receiver.clone());
         let detector = Detector::new(survey.detector.clone(), &receiver);
         Self {
             survey,
-            caster,
+            caster: world.index(),
+            lines: &world.lines,
             beam: Beam::new(survey.scanner.subrays, survey.scanner.divergence_rad),
             discontinuity_m: crate::geometry::SPEED_OF_LIGHT_MPS * survey.receiver.pulse.fwhm_s()
                 / 2.0,
@@ -665,12 +668,7 @@ impl<'a> Simulator<'a> {
             dir: -DVec3::Z,
         };
         self.caster
-            .closest_hit_where(&ray, 0.0, 1e5, &|prim| {
-                matches!(
-                    prim.class,
-                    SurfaceClass::Ground | SurfaceClass::Road | SurfaceClass::Water
-                )
-            })
+            .closest_hit_where(&ray, 0.0, 1e5, &|prim| prim.class.is_ground())
             .map_or(f64::INFINITY, |h| h.t - 0.01)
     }
 
@@ -765,13 +763,7 @@ impl<'a> Simulator<'a> {
         let mut jobs: Vec<(usize, u64, u64)> = Vec::new();
         let mut budget_end = None;
         let mut sent = 0u64;
-        'lines: for (l, line) in self
-            .survey
-            .lines
-            .iter()
-            .enumerate()
-            .skip(control.start.line)
-        {
+        'lines: for (l, line) in self.lines.iter().enumerate().skip(control.start.line) {
             let n = self.survey.pulses_of(line);
             let mut k = if l == control.start.line {
                 control.start.pulse.min(n)
@@ -810,7 +802,7 @@ impl<'a> Simulator<'a> {
             let mut waves = WaveformBlock::default();
             let record = self.record_waveforms.then_some(&mut waves);
             let (points, counts) =
-                self.simulate_block_recording(&self.survey.lines[l], k0, k1, scratch, record);
+                self.simulate_block_recording(&self.lines[l], k0, k1, scratch, record);
             (points, counts, waves)
         };
         let (tx, rx) = mpsc::channel::<(usize, Block)>();
@@ -957,12 +949,24 @@ pub struct RunOutcome {
     pub stopped_at: Option<PulsePosition>,
 }
 
-/// Simulates a whole survey into memory on `threads` threads: a BVH over
-/// its scene, every pulse, the points in pulse order. For tests and small
+/// Simulates a whole survey into memory on `threads` threads: its world
+/// built, every pulse, the points in pulse order. For tests and small
 /// surveys; [`crate::run::run_to_dir`] streams to files instead.
 pub fn simulate_to_memory(survey: &Survey, threads: usize) -> io::Result<Vec<PointRecord>> {
-    let bvh = crate::accel::Bvh::build(survey.scene.clone());
-    let sim = Simulator::new(survey, &bvh);
+    let world = World::build(survey)
+        .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
+    simulate_world_to_memory(survey, &world, threads)
+}
+
+/// Simulates a survey over a world already built (its lines perhaps
+/// changed since) into memory on `threads` threads, the points in pulse
+/// order.
+pub fn simulate_world_to_memory(
+    survey: &Survey,
+    world: &World,
+    threads: usize,
+) -> io::Result<Vec<PointRecord>> {
+    let sim = Simulator::new(survey, world);
     let mut sink = crate::output::MemorySink::default();
     sim.run(threads, &mut [&mut sink], &|_| {})?;
     Ok(sink.points)

@@ -9,6 +9,7 @@ use crate::budget::Budget;
 use crate::plan::Plan;
 use crate::sim::{PulsePosition, RunCounts};
 use crate::survey::Survey;
+use crate::world::World;
 
 /// Contents of `summary.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -102,6 +103,7 @@ impl Summary {
     /// unset), its warnings followed by `scene_warnings`.
     pub fn of(
         survey: &Survey,
+        world: &World,
         plan: Plan,
         m: &Measured,
         files: Vec<String>,
@@ -113,7 +115,7 @@ impl Summary {
             .iter()
             .rposition(|&n| n > 0)
             .map_or(0, |i| i + 1);
-        let mut warnings = survey.warnings.clone();
+        let mut warnings = world.warnings_with(survey);
         warnings.extend_from_slice(scene_warnings);
         Summary {
             lidarsim_version: env!("CARGO_PKG_VERSION"),
@@ -149,7 +151,7 @@ impl Summary {
             scene_primitives: m.scene_primitives,
             files,
             warnings,
-            forest_trees: survey.forest_trees.clone(),
+            forest_trees: world.forest_trees.clone(),
             plan,
             estimate: m.estimate.clone(),
         }

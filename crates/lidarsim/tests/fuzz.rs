@@ -9,7 +9,6 @@
 use std::cell::Cell;
 use std::path::{Path, PathBuf};
 
-use lidarsim::Survey;
 use lidarsim::output::{LasSettings, LasWriter, PointRecord, PointSink};
 use lidarsim::sensor::platform::Interpolation;
 use proptest::prelude::*;
@@ -26,6 +25,16 @@ fn runner(cases: u32) -> TestRunner {
         },
         TestRng::deterministic_rng(RngAlgorithm::ChaCha),
     )
+}
+
+/// A fuzz run that only accepted or only rejected checked half of what it
+/// should: the mutations must reach both the reader's success and its
+/// errors (the runs are deterministic, so this cannot flicker).
+fn both_paths_taken(accepted: u32, rejected: u32) {
+    assert!(
+        accepted > 0 && rejected > 0,
+        "{accepted} accepted, {rejected} rejected: the cases do not exercise both"
+    );
 }
 
 fn temp(name: &str) -> PathBuf {
@@ -130,7 +139,7 @@ fn survey_toml_never_panics_and_errors_name_their_place() {
     let (ok, rejected) = (Cell::new(0u32), Cell::new(0u32));
     runner
         .run(&mutated_survey(), |text| {
-            match Survey::from_toml(&text, Some(Path::new("fuzz.toml"))) {
+            match lidarsim::world::from_toml(&text, Some(Path::new("fuzz.toml"))) {
                 Ok(_) => ok.set(ok.get() + 1),
                 Err(e) => {
                     rejected.set(rejected.get() + 1);
@@ -151,6 +160,7 @@ fn survey_toml_never_panics_and_errors_name_their_place() {
         ok.get(),
         rejected.get()
     );
+    both_paths_taken(ok.get(), rejected.get());
     assert_eq!(ok.get() + rejected.get(), CASES);
 }
 
@@ -205,7 +215,7 @@ fn obj_meshes_never_panic() {
                     format!("{}\n{}", vertices.join("\n"), lines.join("\n")),
                 )
                 .unwrap();
-                match Survey::from_toml(&survey, None) {
+                match lidarsim::world::from_toml(&survey, None) {
                     Ok(_) => ok.set(ok.get() + 1),
                     Err(e) => {
                         rejected.set(rejected.get() + 1);
@@ -224,6 +234,7 @@ fn obj_meshes_never_panic() {
         ok.get(),
         rejected.get()
     );
+    both_paths_taken(ok.get(), rejected.get());
 }
 
 fn csv_row() -> impl Strategy<Value = String> {
@@ -282,6 +293,7 @@ fn trajectory_csv_never_panics() {
         ok.get(),
         rejected.get()
     );
+    both_paths_taken(ok.get(), rejected.get());
 }
 
 fn las_settings() -> LasSettings {
@@ -368,6 +380,7 @@ fn las_header_of_a_resumed_run_never_panics() {
         ok.get(),
         rejected.get()
     );
+    both_paths_taken(ok.get(), rejected.get());
 }
 
 /// Applies byte edits (set, insert, remove) and a final length to `bytes`;
@@ -491,6 +504,7 @@ fn esri_ascii_grids_never_panic_and_errors_name_the_file() {
         ok.get(),
         rejected.get()
     );
+    both_paths_taken(ok.get(), rejected.get());
 }
 
 #[test]
@@ -530,6 +544,7 @@ fn geotiff_bytes_never_panic_and_errors_name_the_file() {
         ok.get(),
         rejected.get()
     );
+    both_paths_taken(ok.get(), rejected.get());
 }
 
 /// A small survey whose only scene entry names `entry` (a `[[mesh]]` or
@@ -576,7 +591,7 @@ fn glb_bytes_never_panic_and_errors_name_the_file() {
                 }
                 let b = mutate(&b, &e, 20 + json_len, len);
                 std::fs::write(&path, &b).unwrap();
-                match Survey::from_toml(&survey, None) {
+                match lidarsim::world::from_toml(&survey, None) {
                     Ok(_) => ok.set(ok.get() + 1),
                     Err(e) => {
                         rejected.set(rejected.get() + 1);
@@ -595,6 +610,7 @@ fn glb_bytes_never_panic_and_errors_name_the_file() {
         ok.get(),
         rejected.get()
     );
+    both_paths_taken(ok.get(), rejected.get());
 }
 
 #[test]
@@ -613,7 +629,7 @@ fn las_point_cloud_bytes_never_panic_and_errors_name_the_file() {
             // The header is the first 227 bytes.
             let b = mutate(&las, &e, 227, len);
             std::fs::write(&path, &b).unwrap();
-            match Survey::from_toml(&survey, None) {
+            match lidarsim::world::from_toml(&survey, None) {
                 Ok(_) => ok.set(ok.get() + 1),
                 Err(e) => {
                     rejected.set(rejected.get() + 1);
@@ -650,4 +666,5 @@ fn las_point_cloud_bytes_never_panic_and_errors_name_the_file() {
         rejected.get() - far_off.get(),
         far_off.get()
     );
+    both_paths_taken(ok.get(), rejected.get());
 }

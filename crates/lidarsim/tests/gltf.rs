@@ -6,9 +6,10 @@
 use std::path::{Path, PathBuf};
 
 use lidarsim::Survey;
-use lidarsim::accel::{Bvh, RayCaster};
+use lidarsim::accel::RayCaster;
 use lidarsim::geometry::{DVec3, Ray};
 use lidarsim::scene::SurfaceClass;
+use lidarsim::world::World;
 
 /// Indices 0 1 2 0 2 3 (u16) and a unit square in glTF's XZ plane (y = 0).
 fn buffer() -> Vec<u8> {
@@ -112,14 +113,15 @@ fn dir() -> PathBuf {
     d
 }
 
-fn survey(file: &Path, extra: &str) -> Result<Survey, lidarsim::survey::SurveyError> {
+/// The world of a survey with one mesh entry for `file`.
+fn survey(file: &Path, extra: &str) -> Result<World, lidarsim::survey::SurveyError> {
     let text = format!(
         "[[flight_line]]\nstart_m = [0, 0, 100]\nend_m = [0, 10, 100]\nspeed_mps = 10\n\
          [materials.grey]\nreflectance = 0.25\n\
          [[mesh]]\nfile = '{}'\nmaterial = 'grey'\noffset_m = [100, 0, 0]\n{extra}\n",
         file.display()
     );
-    Survey::from_toml(&text, None)
+    World::build(&Survey::from_toml(&text, None)?)
 }
 
 #[test]
@@ -135,25 +137,28 @@ fn gltf_and_glb_load_with_node_transforms_axes_materials_and_classes() {
     std::fs::write(&binary, glb()).unwrap();
     for file in [&embedded, &external, &binary] {
         let s = survey(file, "classes = { 'House*' = 'roof' }").unwrap_or_else(|e| panic!("{e}"));
-        let prims = &s.scene.primitives;
+        let prims = &s.scene().primitives;
         assert_eq!(prims.len(), 4, "two squares of two triangles");
         // glTF (x, y, z) = (10 + 2x, 3, −20 + 2z) → world (x, −z, y), then
         // the survey offset of 100 m east.
-        let b = s.scene.bounds();
+        let b = s.scene().bounds();
         assert_eq!(b.min, DVec3::new(110.0, 18.0, 3.0), "{}", file.display());
         assert_eq!(b.max, DVec3::new(112.0, 20.0, 3.0), "{}", file.display());
-        let refl: Vec<f64> = prims
+        // The index orders the triangles by place: sorted, the entry's
+        // 0.25 (the square without a glTF material) comes first.
+        let mut refl: Vec<f64> = prims
             .iter()
-            .map(|p| s.scene.materials[p.material as usize].reflectance)
+            .map(|p| s.scene().materials[p.material as usize].reflectance)
             .collect();
+        refl.sort_by(f64::total_cmp);
+        assert_eq!(&refl[..2], [0.25, 0.25], "no glTF material: the entry's");
         assert!(
-            (refl[0] - 0.4).abs() < 1e-6 && (refl[1] - 0.4).abs() < 1e-6,
+            (refl[2] - 0.4).abs() < 1e-6 && (refl[3] - 0.4).abs() < 1e-6,
             "{refl:?}"
         );
-        assert_eq!(&refl[2..], [0.25, 0.25], "no glTF material: the entry's");
         assert!(prims.iter().all(|p| p.class == SurfaceClass::Roof));
-        let bvh = Bvh::build(s.scene.clone());
-        let hit = bvh
+        let hit = s
+            .index()
             .closest_hit(
                 &Ray::new(DVec3::new(111.5, 18.5, 50.0), -DVec3::Z),
                 0.0,
@@ -166,7 +171,7 @@ fn gltf_and_glb_load_with_node_transforms_axes_materials_and_classes() {
     // nor does "House_A"/"house_mesh": the entry's class.
     let s = survey(&binary, "class = 'bridge'").unwrap();
     assert!(
-        s.scene
+        s.scene()
             .primitives
             .iter()
             .all(|p| p.class == SurfaceClass::Bridge)

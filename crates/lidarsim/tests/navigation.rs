@@ -4,6 +4,8 @@
 use lidarsim::Survey;
 use lidarsim::output::PointRecord;
 use lidarsim::sim::simulate_to_memory;
+use lidarsim::survey::SurveyError;
+use lidarsim::world::World;
 
 const H: f64 = 500.0;
 
@@ -30,6 +32,11 @@ vertices_m = [[-1000, -1000, 0], [1000, -1000, 0], [1000, 1000, 0], [-1000, 1000
 "#
     );
     Survey::from_toml(&text, None).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The world of a survey in TOML text: its lines planned over its scene.
+fn world(text: &str) -> Result<World, SurveyError> {
+    World::build(&Survey::from_toml(text, None)?)
 }
 
 fn simulate(s: &Survey) -> Vec<PointRecord> {
@@ -270,8 +277,10 @@ fn a_written_trajectory_flies_again_the_same() {
         traj.display()
     );
     let b = Survey::from_toml(&text, None).unwrap();
-    assert_eq!(b.lines.len(), 2);
-    assert!((b.lines[1].start_time_s - a.lines[1].start_time_s).abs() < 1e-9);
+    let lines_a = World::build(&a).unwrap().lines;
+    let lines_b = World::build(&b).unwrap().lines;
+    assert_eq!(lines_b.len(), 2);
+    assert!((lines_b[1].start_time_s - lines_a[1].start_time_s).abs() < 1e-9);
     let (pa, pb) = (simulate(&a), simulate(&b));
     // The file ends at the last whole millisecond: compare the pulses both
     // flights emitted.
@@ -336,7 +345,7 @@ material = "grass"
 class = "ground"
 vertices_m = [[-900, -900, 20], [900, -900, 20], [900, 900, 20], [-900, 900, 20]]
 "#;
-    let s = Survey::from_toml(text, None).unwrap();
+    let s = world(text).unwrap();
     // Eastbound (compass 90°) lines spaced W·(1 − 0.3), W = 2·400·tan 20°,
     // over the 300 m north–south extent, 400 m above the ground at z = 20.
     let w = 2.0 * 400.0 * 20f64.to_radians().tan();
@@ -426,7 +435,7 @@ fn trajectory_files_are_checked() {
              material = \"a\"\nvertices_m = [[-99, -99, 0], [99, -99, 0], [99, 99, 0]]\n",
             f.display()
         );
-        match (Survey::from_toml(&text, None), want) {
+        match (world(&text), want) {
             (Ok(s), None) => assert_eq!(s.lines.len(), 2, "0 and 0.0 are one line"),
             (Err(e), Some(w)) => {
                 let d = &e.diagnostics[0];

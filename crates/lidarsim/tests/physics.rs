@@ -4,9 +4,9 @@
 //! thread-count independence.
 
 use lidarsim::Survey;
-use lidarsim::accel::Bvh;
 use lidarsim::output::PointRecord;
 use lidarsim::sim::simulate_to_memory;
+use lidarsim::world::World;
 
 /// A survey over a square ground plane, with extra TOML appended.
 fn survey(scanner: &str, lines: &str, extra: &str) -> Survey {
@@ -38,6 +38,16 @@ fn simulate(s: &Survey, threads: usize) -> Vec<PointRecord> {
     simulate_to_memory(s, threads).unwrap()
 }
 
+/// The survey's world: its scene indexed, its lines planned.
+fn world(s: &Survey) -> World {
+    World::build(s).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Pulses of the survey's first line.
+fn pulses(s: &Survey) -> u64 {
+    s.pulses_of(&world(s).lines[0])
+}
+
 fn rel(a: f64, b: f64) -> f64 {
     (a - b).abs() / b.abs()
 }
@@ -53,7 +63,7 @@ fn swath_width_and_density_over_a_flat_plane() {
         "",
     );
     let pts = simulate(&s, 2);
-    assert_eq!(pts.len() as u64, s.pulses_of(&s.lines[0]));
+    assert_eq!(pts.len() as u64, pulses(&s));
     let xmin = pts.iter().map(|p| p.position_m.x).fold(f64::MAX, f64::min);
     let xmax = pts.iter().map(|p| p.position_m.x).fold(f64::MIN, f64::max);
     let swath = 2.0 * h * theta.tan();
@@ -81,7 +91,7 @@ fn swath_width_and_density_over_a_flat_plane() {
         "{central} vs {want_central}"
     );
     // The planner agrees.
-    let plan = lidarsim::plan::plan(&s, &Bvh::build(s.scene.clone()));
+    let plan = lidarsim::plan::plan(&s, &world(&s));
     assert!(rel(plan.swath_width_m, swath) < 1e-9);
     assert!(rel(plan.point_density_per_m2, want) < 1e-9);
 }
@@ -177,7 +187,7 @@ fn nadir_amplitude(normal_tilt_deg: f64, h: f64) -> f64 {
     );
     let s = Survey::from_toml(&text, None).unwrap();
     let pts = simulate(&s, 2);
-    assert_eq!(pts.len() as u64, s.pulses_of(&s.lines[0]));
+    assert_eq!(pts.len() as u64, pulses(&s));
     pts.iter().map(|p| p.amplitude).sum::<f64>() / pts.len() as f64
 }
 

@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 
 use las::point::Classification;
 use lidarsim::Survey;
-use lidarsim::sim::simulate_to_memory;
+use lidarsim::sim::simulate_world_to_memory;
+use lidarsim::survey::SurveyError;
+use lidarsim::world::World;
 
 fn write_cloud(path: &Path, points: &[([f64; 3], u8)]) {
     let mut writer = las::Writer::from_path(path, las::Header::default()).unwrap();
@@ -65,7 +67,14 @@ fn scene_points() -> Vec<([f64; 3], u8)> {
     pts
 }
 
-fn survey(file: &Path, extra: &str) -> Survey {
+/// A survey and its world from TOML text.
+fn load(text: &str) -> Result<(Survey, World), SurveyError> {
+    let s = Survey::from_toml(text, None)?;
+    let w = World::build(&s)?;
+    Ok((s, w))
+}
+
+fn survey(file: &Path, extra: &str) -> (Survey, World) {
     let text = format!(
         r#"
 seed = 2
@@ -88,22 +97,22 @@ voxel_m = 0.5
 "#,
         file.display()
     );
-    Survey::from_toml(&text, None).unwrap_or_else(|e| panic!("{e}"))
+    load(&text).unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]
 fn rescanned_points_lie_on_voxel_tops_with_the_clouds_classes() {
     let path = dir().join("scene.las");
     write_cloud(&path, &scene_points());
-    let s = survey(&path, "offset_m = [100, 0, 0]");
+    let (s, w) = survey(&path, "offset_m = [100, 0, 0]");
     // Voxels: ground 80 × 80 minus the 20 × 12 under the box; roof 20 × 12;
     // walls: every voxel of the box's outline from z-index 2 to 10
     // (1.03 → 2, 5.13 → 10): outline of a 20 × 12 block = 2·20 + 2·10 = 60
     // voxels per layer, 9 layers; the roof layer (5.23 → 10) is the same
     // layer as the walls' top, so its 20 × 12 voxels include the outline.
     let expect = 80 * 80 - 20 * 12 + 20 * 12 + 60 * 8;
-    assert_eq!(s.scene.primitives.len(), expect);
-    let pts = simulate_to_memory(&s, 2).unwrap();
+    assert_eq!(w.scene().primitives.len(), expect);
+    let pts = simulate_world_to_memory(&s, &w, 2).unwrap();
     assert!(pts.len() > 2000, "{}", pts.len());
     let (mut ground, mut roof) = (0, 0);
     for p in &pts {
@@ -151,11 +160,11 @@ fn class_override_laz_and_errors() {
     write_cloud(&las_path, &pts);
     let size = |p: &Path| std::fs::metadata(p).unwrap().len();
     assert!(size(&laz) * 2 < size(&las_path), "the .laz is compressed");
-    let a = survey(&laz, "class = 'water'\noffset_m = [105, 0, 0]");
-    let b = survey(&las_path, "class = 'water'\noffset_m = [105, 0, 0]");
-    assert_eq!(a.scene.primitives.len(), 40 * 40);
-    assert_eq!(a.scene.primitives.len(), b.scene.primitives.len());
-    let out = simulate_to_memory(&a, 1).unwrap();
+    let (a, aw) = survey(&laz, "class = 'water'\noffset_m = [105, 0, 0]");
+    let (_, bw) = survey(&las_path, "class = 'water'\noffset_m = [105, 0, 0]");
+    assert_eq!(aw.scene().primitives.len(), 40 * 40);
+    assert_eq!(aw.scene().primitives.len(), bw.scene().primitives.len());
+    let out = simulate_world_to_memory(&a, &aw, 1).unwrap();
     assert!(!out.is_empty());
     assert!(
         out.iter()
@@ -189,7 +198,7 @@ fn class_override_laz_and_errors() {
              [materials.any]\nreflectance = 0.4\n[[point_cloud]]\nfile = '{}'\nmaterial = 'any'\n{extra}\n",
             file.display()
         );
-        let e = Survey::from_toml(&text, None).unwrap_err();
+        let e = load(&text).unwrap_err();
         assert_eq!(e.diagnostics[0].key, key, "{e}");
         assert!(e.diagnostics[0].message.contains(what), "{e}");
     }
@@ -198,6 +207,6 @@ fn class_override_laz_and_errors() {
          [materials.any]\nreflectance = 0.4\n[[point_cloud]]\nfile = '{}'\nmaterial = 'any'\nvoxel_m = 0\n",
         las_path.display()
     );
-    let e = Survey::from_toml(&text, None).unwrap_err();
+    let e = load(&text).unwrap_err();
     assert_eq!(e.diagnostics[0].key, "point_cloud[0].voxel_m", "{e}");
 }

@@ -16,10 +16,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use lidarsim::Survey;
-use lidarsim::accel::Bvh;
 use lidarsim::output::{PointRecord, PointSink};
 use lidarsim::run::{RunOptions, Summary, run_to_dir};
 use lidarsim::sim::{BLOCK_PULSES, PulsePosition, RunControl, Simulator};
+use lidarsim::world::World;
 
 /// Two lines of 1.2 s at 20 kHz (12 blocks of 2048 pulses each), GNSS/IMU
 /// errors on (LAS extra bytes), LAS and XYZ.
@@ -201,7 +201,8 @@ fn interrupted_then_resumed_equals_uninterrupted() {
     let full = dir("full");
     let reference = run_to_dir(&s, &full, &RunOptions::new(2, &|_| {})).unwrap();
     assert!(reference.complete && reference.next_pulse.is_none());
-    let total: u64 = s.lines.iter().map(|l| s.pulses_of(l)).sum();
+    let lines = World::build(&s).unwrap().lines;
+    let total: u64 = lines.iter().map(|l| s.pulses_of(l)).sum();
     assert_eq!(reference.pulses, total);
 
     let part = dir("part");
@@ -211,7 +212,7 @@ fn interrupted_then_resumed_equals_uninterrupted() {
     assert_eq!(next.pulse % lidarsim::sim::BLOCK_PULSES, 0);
     assert!(first.pulses < total);
     // Pulses before `next` were all simulated, none after.
-    let before: u64 = s.lines[..next.line as usize - 1]
+    let before: u64 = lines[..next.line as usize - 1]
         .iter()
         .map(|l| s.pulses_of(l))
         .sum::<u64>()
@@ -347,8 +348,8 @@ impl PointSink for StopAtFirstBlock {
 #[test]
 fn one_thread_simulates_and_writes_in_turn_on_the_calling_thread() {
     let s = survey();
-    let bvh = Bvh::build(s.scene.clone());
-    let sim = Simulator::new(&s, &bvh);
+    let world = World::build(&s).unwrap();
+    let sim = Simulator::new(&s, &world);
     for threads in [1, 2] {
         let stop = Arc::new(AtomicBool::new(false));
         let mut sink = StopAtFirstBlock {

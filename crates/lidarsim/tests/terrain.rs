@@ -162,7 +162,8 @@ fn fbm_terrain_survey_is_reproducible_and_within_its_relief() {
                    resolution_m = 2\nrelief_m = 30\nseed = 9\nmaterial = 'soil'\nclass = 'road'\n";
     let text = survey_text(terrain, 0.0, -60.0, 60.0, 500.0);
     let s = Survey::from_toml(&text, None).unwrap_or_else(|e| panic!("{e}"));
-    let b = s.scene.bounds();
+    let world = lidarsim::world::World::build(&s).unwrap_or_else(|e| panic!("{e}"));
+    let b = world.scene().bounds();
     assert_eq!(
         (b.min.x, b.min.y, b.max.x, b.max.y),
         (-150.0, -150.0, 150.0, 150.0)
@@ -227,7 +228,7 @@ fn terrain_key_errors_name_the_key() {
     ];
     for (terrain, key, what) in cases {
         let text = survey_text(terrain, 0.0, 0.0, 10.0, 300.0);
-        let e = Survey::from_toml(&text, Some(Path::new("s.toml"))).unwrap_err();
+        let e = lidarsim::world::from_toml(&text, Some(Path::new("s.toml"))).unwrap_err();
         // All problems of a file are reported, sorted by line: find ours.
         let d = e
             .diagnostics

@@ -6,11 +6,25 @@ use lidarsim::accel::{BruteForce, Bvh, RayCaster};
 use lidarsim::geometry::{DVec3, Ray};
 use lidarsim::output::PointRecord;
 use lidarsim::scene::{Shape, Species};
-use lidarsim::sim::{COMPONENT_FOLIAGE, COMPONENT_TRUNK, simulate_to_memory};
+use lidarsim::sim::{COMPONENT_FOLIAGE, COMPONENT_TRUNK, simulate_world_to_memory};
+use lidarsim::world::World;
+
+/// A survey and its world.
+struct Case {
+    s: Survey,
+    w: World,
+}
+
+impl Case {
+    /// Pulses of the first line.
+    fn pulses(&self) -> u64 {
+        self.s.pulses_of(&self.w.lines[0])
+    }
+}
 
 /// A survey with one northbound line at `x` from `y = -half` to `half`,
 /// flown at `speed` m/s, 500 m above flat ground.
-fn survey(scanner: &str, (x, half, speed): (f64, f64, f64), extra: &str) -> Survey {
+fn survey(scanner: &str, (x, half, speed): (f64, f64, f64), extra: &str) -> Case {
     let text = format!(
         r#"
 seed = 21
@@ -30,11 +44,13 @@ vertices_m = [[-200, -200, 0], [200, -200, 0], [200, 200, 0], [-200, 200, 0]]
 "#,
         y0 = -half
     );
-    Survey::from_toml(&text, None).unwrap_or_else(|e| panic!("{e}"))
+    let s = Survey::from_toml(&text, None).unwrap_or_else(|e| panic!("{e}"));
+    let w = World::build(&s).unwrap_or_else(|e| panic!("{e}"));
+    Case { s, w }
 }
 
-fn simulate(s: &Survey) -> Vec<PointRecord> {
-    simulate_to_memory(s, 2).unwrap()
+fn simulate(c: &Case) -> Vec<PointRecord> {
+    simulate_world_to_memory(&c.s, &c.w, 2).unwrap()
 }
 
 /// Pulses grouped: (number of returns, classes) of each pulse.
@@ -114,7 +130,7 @@ fn ground_fraction_under_a_uniform_crown_is_beer_lambert() {
         );
         let points = simulate(&s);
         let pulses = per_pulse(&points);
-        let n = s.pulses_of(&s.lines[0]) as f64;
+        let n = s.pulses() as f64;
         let ground = pulses
             .iter()
             .filter(|p| p.last().unwrap().classification == 2)
@@ -152,15 +168,15 @@ seed = 4
         (0.0, 30.0, 40.0),
         forest,
     );
-    let trees: Vec<_> = s
-        .scene
-        .primitives
-        .iter()
-        .filter_map(|p| match &p.shape {
-            Shape::Crown(c) => Some(*c.clone()),
-            _ => None,
-        })
-        .collect();
+    let trees: Vec<_> =
+        s.w.scene()
+            .primitives
+            .iter()
+            .filter_map(|p| match &p.shape {
+                Shape::Crown(c) => Some(*c.clone()),
+                _ => None,
+            })
+            .collect();
     assert_eq!(trees.len(), 384); // 0.64 ha × 600 /ha
     let points = simulate(&s);
     // Sub-rays reach 1.86 times the 1/e² radius (the Gaussian beam's tails
@@ -197,7 +213,7 @@ seed = 4
     // no further (checked ray by ray against the brute-force reference).
     // The hierarchy puts the primitives in leaf order: the reference and
     // the loop work on the same order.
-    let bvh = Bvh::build(s.scene.clone());
+    let bvh = Bvh::build(s.w.scene().clone());
     let brute = BruteForce::new(bvh.scene().clone());
     let mut spans = Vec::new();
     let mut spans_ref = Vec::new();
@@ -236,7 +252,7 @@ fn a_broad_trunk_hides_the_ground() {
         tree,
     );
     let points = simulate(&s);
-    assert_eq!(points.len() as u64, s.pulses_of(&s.lines[0]));
+    assert_eq!(points.len() as u64, s.pulses());
     for p in &points {
         assert_eq!(p.component, COMPONENT_TRUNK);
         assert_eq!(p.number_of_returns, 1);
@@ -259,9 +275,9 @@ fn uniform_spruce(rho: f64, k: f64) -> String {
 
 /// Mean energy per pulse of the ground echoes and of the foliage echoes
 /// (amplitudes, each scaled back to the reference range: × (R/Rn)²).
-fn energies(s: &Survey) -> (f64, f64) {
+fn energies(s: &Case) -> (f64, f64) {
     let points = simulate(s);
-    let n = s.pulses_of(&s.lines[0]) as f64;
+    let n = s.pulses() as f64;
     let scaled = |p: &&PointRecord| p.amplitude * (p.range_m / 1000.0).powi(2);
     let ground: f64 = points
         .iter()
@@ -292,7 +308,7 @@ fn energy_through_a_crown_is_conserved_and_follows_the_optical_depth() {
                    [receiver]\nmin_amplitude = 1e-6";
     let run = |tree: &str| {
         let mut s = survey(scanner, (0.02, 0.05, 0.1), tree);
-        for l in &mut s.lines {
+        for l in &mut s.w.lines {
             l.start_m.z = 100.0;
             l.end_m.z = 100.0;
         }
@@ -404,17 +420,17 @@ fn first_return_cover_holds_from_500_to_2000_m() {
             (0.0, 40.0, 44.4),
             stand,
         );
-        for l in &mut s.lines {
+        for l in &mut s.w.lines {
             l.start_m.z = h;
             l.end_m.z = h;
         }
-        let trees: std::collections::BTreeSet<u32> = s
-            .scene
-            .primitives
-            .iter()
-            .filter(|p| matches!(p.shape, Shape::Crown(_)))
-            .map(|p| p.object)
-            .collect();
+        let trees: std::collections::BTreeSet<u32> =
+            s.w.scene()
+                .primitives
+                .iter()
+                .filter(|p| matches!(p.shape, Shape::Crown(_)))
+                .map(|p| p.object)
+                .collect();
         let points = simulate(&s);
         let inner = |p: &PointRecord| p.position_m.x.abs() < 25.0 && p.position_m.y.abs() < 25.0;
         let first: Vec<&PointRecord> = points

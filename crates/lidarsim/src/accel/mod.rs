@@ -228,6 +228,20 @@ pub(crate) fn volume_span(
     }
 }
 
+/// Height of the ground below `p` (ground, road or water surfaces; any
+/// surface if none of those lies below; `z = 0` if nothing does).
+pub fn ground_below(caster: &dyn RayCaster, p: DVec3) -> f64 {
+    let ray = Ray {
+        origin: p,
+        dir: -DVec3::Z,
+    };
+    let ground = |prim: &crate::scene::Primitive| prim.class.is_ground();
+    caster
+        .closest_hit_where(&ray, 0.0, f64::INFINITY, &ground)
+        .or_else(|| caster.closest_hit(&ray, 0.0, f64::INFINITY))
+        .map_or(0.0, |h| p.z - h.t)
+}
+
 /// Tests every primitive: slow, obviously correct, used as the reference.
 #[derive(Debug)]
 pub struct BruteForce {

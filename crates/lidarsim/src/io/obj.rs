@@ -679,11 +679,35 @@ mod tests {
             let parsed = tobj_groups(&models);
             assert_eq!(faces(&fast.groups()), faces(&parsed), "case {i}");
         }
-        // The benchmark's buildings file.
-        let path = dir.join(format!("lidarsim-plain-{}.obj", std::process::id()));
-        crate::bench::write_boxes_obj(crate::bench::BenchScene::Flat, &path).unwrap();
-        let text = std::fs::read(&path).unwrap();
-        let _ = std::fs::remove_file(&path);
+        // Boxes as the benchmark writes them: a group per box, 12
+        // triangles each, indices counted from the file's start.
+        let path = dir.join("boxes.obj");
+        let mut text = String::new();
+        for b in 0..5 {
+            text.push_str(&format!("g box_{b}\n"));
+            for k in 0..8 {
+                let (x, y, z) = (b * 20 + (k & 1) * 10, ((k >> 1) & 1) * 10, (k >> 2) * 8);
+                text.push_str(&format!("v {x} {y} {z}\n"));
+            }
+            let o = b * 8;
+            for f in [
+                [1, 3, 4],
+                [1, 4, 2],
+                [5, 6, 8],
+                [5, 8, 7],
+                [1, 2, 6],
+                [1, 6, 5],
+                [3, 7, 8],
+                [3, 8, 4],
+                [1, 5, 7],
+                [1, 7, 3],
+                [2, 4, 8],
+                [2, 8, 6],
+            ] {
+                text.push_str(&format!("f {} {} {}\n", o + f[0], o + f[1], o + f[2]));
+            }
+        }
+        let text = text.into_bytes();
         let fast = plain_obj(&text).unwrap();
         let (models, _) = parse_with_tobj(&text, &path, &dir, &HashMap::new()).unwrap();
         let parsed = tobj_groups(&models);

@@ -2,7 +2,7 @@
 //! summary.
 //!
 //! [`run_to_dir`] prepares the directory ([`outdir`]), simulates the survey
-//! into its point files and writes `summary.json` ([`summary`]); a run
+//! into its point files and writes `summary.json` ([`crate::summary`]); a run
 //! stopped early leaves its point files finished but under their
 //! `.partial` names with a record a resumed run checks ([`resume`]).
 
@@ -16,7 +16,6 @@ use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
-use crate::accel::{Bvh, RayCaster};
 use crate::files::{
     digitizer, input_files, las_settings, point_files, replayable, write_trajectory,
 };
@@ -25,10 +24,10 @@ use crate::output::{
 };
 use crate::plan::{Plan, plan};
 use crate::report::ReportSink;
-use crate::scene::Scene;
 use crate::sim::{PulsePosition, RunControl, RunCounts, Simulator, Timer};
 use crate::summary::Measured;
 use crate::survey::Survey;
+use crate::world::World;
 
 /// A failure while writing the results.
 #[derive(Debug, thiserror::Error)]
@@ -114,42 +113,26 @@ fn run_error(dir: &Path, e: io::Error) -> RunError {
     }
 }
 
-/// Simulates `survey` and writes the point files of `[output] formats`
-/// (`points.las` with `points.wdp` for full waveforms, `points.laz`,
-/// `points.ply`, `points.xyz`), the trajectories, `report.html` and
-/// `summary.json` into `out_dir` (see [`outdir`] for which directories it
-/// accepts). Files appear under their final names only when complete. When
-/// `options.stop` interrupts the run, the point files are finished for the
-/// pulses simulated so far but keep their `.partial` names, and
-/// `summary.json` says `"complete": false` and where to go on; with
-/// `options.resume` such a run is continued, and its files end up byte for
-/// byte those of an uninterrupted run (apart from the timings). The scene
-/// is copied for the ray caster; [`run_survey_to_dir`] moves it.
+/// Builds the world of `survey` ([`World::build`]) and runs it into
+/// `out_dir` ([`run_world_to_dir`]); a problem the world finds in the
+/// survey is an error naming the survey file.
 pub fn run_to_dir(
     survey: &Survey,
     out_dir: &Path,
     options: &RunOptions<'_>,
 ) -> Result<Summary, RunError> {
-    run_with_scene(survey, survey.scene.clone(), out_dir, options)
-}
-
-/// [`run_to_dir`] for a survey the caller no longer needs: its scene moves
-/// into the ray caster instead of being copied, so that a large mesh (a
-/// million-triangle terrain: ~100 MB) is held once.
-pub fn run_survey_to_dir(
-    mut survey: Survey,
-    out_dir: &Path,
-    options: &RunOptions<'_>,
-) -> Result<Summary, RunError> {
-    let scene = std::mem::take(&mut survey.scene);
-    run_with_scene(&survey, scene, out_dir, options)
+    let world = World::build(survey).map_err(|e| RunError {
+        path: PathBuf::from(survey.file_name()),
+        source: io::Error::new(io::ErrorKind::InvalidData, e.to_string()),
+    })?;
+    run_world_to_dir(survey, &world, out_dir, options)
 }
 
 /// Opens the sinks of the point files `names`: created afresh, or
 /// continued from the lengths an interrupted run recorded.
 fn open_sinks(
     survey: &Survey,
-    caster: &dyn RayCaster,
+    world: &World,
     out_dir: &Path,
     prev: Option<&resume::Interrupted>,
 ) -> Result<Vec<Box<dyn PointSink>>, RunError> {
@@ -172,9 +155,9 @@ fn open_sinks(
     let mut sinks: Vec<Box<dyn PointSink>> = Vec::new();
     if formats.las {
         let path = out_dir.join("points.las");
-        let mut settings = las_settings(survey, caster);
+        let mut settings = las_settings(survey, world);
         if formats.las_waveform {
-            settings.waveform = Some(digitizer(survey, caster));
+            settings.waveform = Some(digitizer(survey, world));
         }
         sinks.push(match prev {
             None => Box::new(LasWriter::create(&path, settings).map_err(created(&path))?),
@@ -198,9 +181,9 @@ fn open_sinks(
         // packets).
         let settings = LasSettings {
             compressed: true,
-            waveform: formats.las_waveform.then(|| digitizer(survey, caster)),
+            waveform: formats.las_waveform.then(|| digitizer(survey, world)),
             waveform_file_shared: true,
-            ..las_settings(survey, caster)
+            ..las_settings(survey, world)
         };
         sinks.push(Box::new(
             LasWriter::create(&path, settings).map_err(created(&path))?,
@@ -227,11 +210,20 @@ fn open_sinks(
     Ok(sinks)
 }
 
-/// [`run_to_dir`] with the scene to index given separately (the survey's
-/// own scene is not used).
-fn run_with_scene(
+/// Simulates `survey` over `world` and writes the point files of
+/// `[output] formats` (`points.las` with `points.wdp` for full waveforms,
+/// `points.laz`, `points.ply`, `points.xyz`), the trajectories,
+/// `report.html` and `summary.json` into `out_dir` (see [`outdir`] for
+/// which directories it accepts). Files appear under their final names
+/// only when complete. When `options.stop` interrupts the run, the point
+/// files are finished for the pulses simulated so far but keep their
+/// `.partial` names, and `summary.json` says `"complete": false` and where
+/// to go on; with `options.resume` such a run is continued, and its files
+/// end up byte for byte those of an uninterrupted run (apart from the
+/// timings).
+pub fn run_world_to_dir(
     survey: &Survey,
-    scene: Scene,
+    world: &World,
     out_dir: &Path,
     options: &RunOptions<'_>,
 ) -> Result<Summary, RunError> {
@@ -252,7 +244,7 @@ fn run_with_scene(
                 ),
             });
         }
-        let (prev, state) = resume::read(out_dir, survey, &names)?;
+        let (prev, state) = resume::read(out_dir, survey, &world.lines, &names)?;
         (Some(prev), state)
     } else {
         outdir::check_inputs(out_dir, &input_files(survey))?;
@@ -261,9 +253,9 @@ fn run_with_scene(
     };
 
     // What the run will cost, refused before any work when it cannot fit.
-    let budget = crate::budget::estimate(survey, &scene, options.threads);
+    let budget = crate::budget::estimate(survey, world, options.threads);
     if !options.no_space_check {
-        let total: u64 = survey.lines.iter().map(|l| survey.pulses_of(l)).sum();
+        let total: u64 = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
         let share = prev.as_ref().map_or(1.0, |p| {
             1.0 - p.counts().pulses as f64 / total.max(1) as f64
         });
@@ -288,18 +280,15 @@ fn run_with_scene(
         }
     }
 
-    let index_timer = Timer::start();
-    let bvh = Bvh::build(scene);
-    let index_time_s = index_timer.seconds();
-    let plan = plan(survey, &bvh);
-    let scene_warnings = crate::plan::warnings(survey, &bvh, &plan);
+    let plan = plan(survey, world);
+    let scene_warnings = crate::plan::warnings(survey, world, &plan);
     if let Some(warn) = options.on_warning {
         for w in &scene_warnings {
             warn(w);
         }
     }
 
-    let mut sinks = open_sinks(survey, &bvh, out_dir, prev.as_ref())?;
+    let mut sinks = open_sinks(survey, world, out_dir, prev.as_ref())?;
     let mut files: Vec<String> = names.iter().map(|n| n.to_string()).collect();
 
     // The survey as run, with the seed fixed and file paths made absolute,
@@ -322,12 +311,12 @@ fn run_with_scene(
     ] {
         let path = out_dir.join(name);
         if prev.is_none() {
-            write_trajectory(survey, &path, observed).map_err(io_err(&path))?;
+            write_trajectory(survey, &world.lines, &path, observed).map_err(io_err(&path))?;
         }
         files.push(name.to_string());
     }
 
-    let mut report = ReportSink::new(covered_area(survey, &bvh, &plan), plan.point_density_per_m2);
+    let mut report = ReportSink::new(covered_area(world, &plan), plan.point_density_per_m2);
     let mut before = RunCounts::default();
     let mut start = PulsePosition::default();
     let mut wall_before = 0.0;
@@ -337,7 +326,7 @@ fn run_with_scene(
         start = prev.start();
         wall_before = prev.wall_time_s;
     }
-    let sim = Simulator::new(survey, &bvh).with_waveforms(survey.output.formats.las_waveform);
+    let sim = Simulator::new(survey, world).with_waveforms(survey.output.formats.las_waveform);
     let timer = Timer::start();
     let mut refs: Vec<&mut (dyn PointSink + 'static)> =
         sinks.iter_mut().map(|b| b.as_mut()).collect();
@@ -366,8 +355,8 @@ fn run_with_scene(
         counts,
         threads: options.threads,
         wall_time_s: wall_before + timer.seconds(),
-        index_time_s,
-        scene_primitives: bvh.scene().primitives.len(),
+        index_time_s: world.index_time_s,
+        scene_primitives: world.scene().primitives.len(),
         estimate: budget.clone(),
     };
 
@@ -389,7 +378,14 @@ fn run_with_scene(
         }
         files.push(REPORT_STATE.to_string());
         files.push("summary.json".to_string());
-        let mut summary = Summary::of(survey, plan, &measured(counts), files, &scene_warnings);
+        let mut summary = Summary::of(
+            survey,
+            world,
+            plan,
+            &measured(counts),
+            files,
+            &scene_warnings,
+        );
         summary.complete = false;
         summary.next_pulse = Some(next);
         summary.resume = Some(record);
@@ -404,7 +400,14 @@ fn run_with_scene(
 
     files.push("report.html".to_string());
     files.push("summary.json".to_string());
-    let summary = Summary::of(survey, plan, &measured(counts), files, &scene_warnings);
+    let summary = Summary::of(
+        survey,
+        world,
+        plan,
+        &measured(counts),
+        files,
+        &scene_warnings,
+    );
     // The report, with the waveforms of a pulse with the most echoes and of
     // a single-echo pulse, simulated again.
     let mut waveforms = Vec::new();
@@ -417,14 +420,14 @@ fn run_with_scene(
             .map(|(l, k)| (l, k, "a single echo".to_string())),
     ];
     for (l, k, what) in picks.into_iter().flatten() {
-        if let Some(line) = survey.lines.get(l as usize) {
+        if let Some(line) = world.lines.get(l as usize) {
             let (plot, _) = crate::render::WaveformPlot::of_pulse(&sim, line, k);
             waveforms.push((format!("Line {} pulse {k}: {what}", l + 1), plot));
         }
     }
     let report_path = out_dir.join("report.html");
-    let page =
-        crate::report::html(survey, &summary, &report, &waveforms).map_err(io_err(&report_path))?;
+    let page = crate::report::html(survey, &world.lines, &summary, &report, &waveforms)
+        .map_err(io_err(&report_path))?;
     write_atomic(&report_path, page.as_bytes()).map_err(io_err(&report_path))?;
 
     let json = serde_json::to_vec_pretty(&summary).map_err(|e| io_err(&summary_path)(e.into()))?;
@@ -438,11 +441,11 @@ fn run_with_scene(
 
 /// The part of the scene the flight lines can see: each line's bounding box
 /// widened by half its swath and 10 m, within the scene's bounds (x, y).
-fn covered_area(survey: &Survey, caster: &dyn RayCaster, plan: &Plan) -> crate::geometry::Aabb {
+fn covered_area(world: &World, plan: &Plan) -> crate::geometry::Aabb {
     use crate::geometry::{Aabb, DVec3};
-    let scene = caster.scene().bounds();
+    let scene = world.scene().bounds();
     let mut area = Aabb::EMPTY;
-    for (line, lp) in survey.lines.iter().zip(&plan.lines) {
+    for (line, lp) in world.lines.iter().zip(&plan.lines) {
         let m = DVec3::new(
             lp.swath_width_m / 2.0 + 10.0,
             lp.swath_width_m / 2.0 + 10.0,

@@ -19,6 +19,7 @@ use serde::Deserialize;
 
 use super::RunError;
 use crate::output::AtomicFile;
+use crate::sensor::platform::FlightLine;
 use crate::sim::{PulsePosition, RunCounts};
 pub use crate::summary::{FileState, NextPulse, ResumeState};
 use crate::survey::Survey;
@@ -165,6 +166,7 @@ pub fn record(
 pub fn read(
     dir: &Path,
     survey: &Survey,
+    lines: &[FlightLine],
     names: &[&str],
 ) -> Result<(Interrupted, Vec<u8>), RunError> {
     let path = dir.join("summary.json");
@@ -221,14 +223,13 @@ pub fn read(
         )
     };
     // The position and the pulse count must agree.
-    let line_ok = next.line >= 1 && (next.line as usize) <= survey.lines.len();
-    let before: u64 = survey
-        .lines
+    let line_ok = next.line >= 1 && (next.line as usize) <= lines.len();
+    let before: u64 = lines
         .iter()
         .take(next.line.saturating_sub(1) as usize)
         .map(|l| survey.pulses_of(l))
         .sum();
-    let in_line = line_ok && next.pulse < survey.pulses_of(&survey.lines[next.line as usize - 1]);
+    let in_line = line_ok && next.pulse < survey.pulses_of(&lines[next.line as usize - 1]);
     if !in_line || before + next.pulse != prev.pulses {
         return Err(changed(&format!(
             "next pulse {} of line {} does not follow the {} pulses simulated",

@@ -97,6 +97,15 @@ impl SurfaceClass {
             .unwrap_or("unclassified")
     }
 
+    /// Whether this is what points stand on: ground, road or water (the
+    /// surfaces heights above ground and flying heights are measured from).
+    pub fn is_ground(self) -> bool {
+        matches!(
+            self,
+            SurfaceClass::Ground | SurfaceClass::Road | SurfaceClass::Water
+        )
+    }
+
     /// ASPRS classification code for a point of this class that lies
     /// `height_above_ground_m` above the ground beneath it (only used for
     /// vegetation: low < 0.5 m ≤ medium < 2 m ≤ high, the usual split of

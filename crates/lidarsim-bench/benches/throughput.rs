@@ -1,7 +1,7 @@
 //! Throughput benchmark: pulses per second on the demo scene, on a flat
 //! plane and over forests of 100 and 10 000 trees, for 1 and 2 threads.
 //!
-//! Run with `cargo bench -p lidarsim --bench throughput`. Each case runs
+//! Run with `cargo bench -p lidarsim-bench --bench throughput`. Each case runs
 //! once to warm up, then `REPEATS` times; the median is reported, with the
 //! spread (min–max), as plain `key value` lines a script can read. Points go
 //! to a sink that only counts them, so the figures measure simulation, not
@@ -11,10 +11,10 @@ use std::io;
 use std::time::Instant;
 
 use lidarsim::Survey;
-use lidarsim::accel::Bvh;
 use lidarsim::output::{PointRecord, PointSink};
 use lidarsim::run::{RunOptions, run_to_dir};
 use lidarsim::sim::Simulator;
+use lidarsim::world::World;
 
 const REPEATS: usize = 5;
 
@@ -98,7 +98,8 @@ seed = 3
         gh = h / 2.0 + 50.0,
     );
     let s = Survey::from_toml(&text, None).expect("forest survey");
-    assert_eq!(s.forest_trees, [trees]);
+    let placed = World::build(&s).expect("forest world").forest_trees;
+    assert_eq!(placed, [trees]);
     s
 }
 
@@ -107,8 +108,8 @@ fn demo() -> Survey {
 }
 
 fn bench(name: &str, survey: &Survey, threads: usize) {
-    let bvh = Bvh::build(survey.scene.clone());
-    let sim = Simulator::new(survey, &bvh);
+    let world = World::build(survey).expect("world");
+    let sim = Simulator::new(survey, &world);
     let run = || {
         let mut sink = Count::default();
         let t = Instant::now();
@@ -121,7 +122,7 @@ fn bench(name: &str, survey: &Survey, threads: usize) {
         .collect();
     let lo = rates.iter().cloned().fold(f64::MAX, f64::min);
     let hi = rates.iter().cloned().fold(f64::MIN, f64::max);
-    let m = lidarsim::bench::median(&rates).expect("REPEATS > 0");
+    let m = lidarsim_bench::median(&rates).expect("REPEATS > 0");
     let rays = m * survey.scanner.subrays as f64;
     let points = m * counts.points as f64 / counts.pulses as f64;
     println!(

@@ -1,7 +1,7 @@
 //! Output benchmark: file size and write rate of each point format for the
 //! built-in demo (1.5 million pulses).
 //!
-//! Run with `cargo bench -p lidarsim --bench outputs` (or
+//! Run with `cargo bench -p lidarsim-bench --bench outputs` (or
 //! `scripts/bench_outputs.sh`). The demo is simulated once per format on
 //! all cores with waveform recording on (so every run does the same work),
 //! and the one writer is wrapped in a sink that times only the calls into
@@ -14,20 +14,20 @@
 use std::path::Path;
 
 use lidarsim::Survey;
-use lidarsim::accel::Bvh;
-use lidarsim::bench::TimedSink;
 use lidarsim::files::las_settings;
 use lidarsim::output::{LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter};
 use lidarsim::sim::Simulator;
+use lidarsim::world::World;
+use lidarsim_bench::TimedSink;
 
 fn main() {
     let survey = Survey::from_raw(lidarsim::demo::demo_survey(), None).expect("demo survey");
-    let bvh = Bvh::build(survey.scene.clone());
+    let world = World::build(&survey).expect("world");
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../target/bench-outputs");
     std::fs::create_dir_all(&dir).expect("output directory");
     let threads = std::thread::available_parallelism().map_or(2, |n| n.get());
-    let base = las_settings(&survey, &bvh);
-    let digitizer = lidarsim::files::digitizer(&survey, &bvh);
+    let base = las_settings(&survey, &world);
+    let digitizer = lidarsim::files::digitizer(&survey, &world);
     let cases: [(&str, &[&str]); 6] = [
         ("las", &["points.las"]),
         ("laz", &["points.laz"]),
@@ -75,7 +75,7 @@ fn main() {
             _ => Box::new(XyzWriter::create(&path, [0.0; 3]).unwrap()),
         };
         let mut timed = TimedSink::new(sink);
-        let sim = Simulator::new(&survey, &bvh).with_waveforms(true);
+        let sim = Simulator::new(&survey, &world).with_waveforms(true);
         sim.run(threads, &mut [&mut timed], &|_| {}).expect("run");
         let w = timed.finish_timed().expect("finish");
         let cpu_s = w.cpu_s.unwrap_or(0.0);

@@ -1,4 +1,6 @@
-//! The performance benchmark scenes and the measurement of a run on them.
+//! The performance benchmark of `lidarsim bench`: its scenes and the
+//! measurement of a run on them (a crate of its own, beside the library,
+//! so that process clocks and `/proc` reads stay out of its API).
 //!
 //! Two scenes, generated procedurally and written as OBJ meshes with a
 //! survey file so that other simulators can be run on identical input
@@ -23,11 +25,11 @@ use std::io::{self, BufWriter, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use crate::Survey;
-use crate::accel::{Bvh, RayCaster};
-use crate::files::las_settings;
-use crate::output::{LasWriter, PointRecord, PointSink, WaveformBlock};
-use crate::sim::Simulator;
+use lidarsim::Survey;
+use lidarsim::files::las_settings;
+use lidarsim::output::{LasWriter, PointRecord, PointSink, WaveformBlock};
+use lidarsim::sim::Simulator;
+use lidarsim::world::World;
 
 /// A benchmark scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -530,19 +532,18 @@ pub fn measure(
 ) -> Result<SceneFigures, String> {
     reset_peak_rss();
     let t0 = Instant::now();
-    let mut survey = Survey::load(survey_path).map_err(|e| e.to_string())?;
+    let survey = Survey::load(survey_path).map_err(|e| e.to_string())?;
     let parse_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let primitives = survey.scene.primitives.len();
-    // The hierarchy takes the scene: one copy of a million triangles.
-    let bvh = Bvh::build(std::mem::take(&mut survey.scene));
+    let world = World::build(&survey).map_err(|e| e.to_string())?;
     let build_s = t1.elapsed().as_secs_f64();
-    let sim = Simulator::new(&survey, &bvh);
+    let primitives = world.scene().primitives.len();
+    let sim = Simulator::new(&survey, &world);
     let subrays = survey.scanner.subrays as u64;
     let mut runs = Vec::new();
     for &n in threads {
         let path = work_dir.join(format!("{}-{n}.las", scene.name()));
-        let settings = las_settings(&survey, &bvh as &dyn RayCaster);
+        let settings = las_settings(&survey, &world);
         let cpu0 = process_cpu_seconds();
         let t = Instant::now();
         let las = LasWriter::create(&path, settings).map_err(|e| e.to_string())?;
@@ -655,16 +656,17 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("lidarsim-bench-{}", std::process::id()));
         let survey = export(BenchScene::Flat, &dir, PULSES).unwrap();
         let s = Survey::load(&survey).unwrap();
-        assert_eq!(s.scene.primitives.len(), 62);
-        use crate::scene::SurfaceClass;
-        let count = |c| s.scene.primitives.iter().filter(|p| p.class == c).count();
+        let w = World::build(&s).unwrap();
+        assert_eq!(w.scene().primitives.len(), 62);
+        use lidarsim::scene::SurfaceClass;
+        let count = |c| w.scene().primitives.iter().filter(|p| p.class == c).count();
         assert_eq!(count(SurfaceClass::Ground), 2);
         assert_eq!(count(SurfaceClass::Roof), 5 * 4);
         assert_eq!(count(SurfaceClass::Wall), 5 * 8);
         // 300 m at 60 m/s and 100 kHz.
-        assert_eq!(s.pulses_of(&s.lines[0]), 500_000);
+        assert_eq!(s.pulses_of(&w.lines[0]), 500_000);
         // Box roofs at their heights.
-        let b = s.scene.bounds();
+        let b = w.scene().bounds();
         assert!((b.max.z - 40.0).abs() < 1e-9);
         std::fs::remove_dir_all(&dir).unwrap();
     }

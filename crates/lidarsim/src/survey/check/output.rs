@@ -1,0 +1,153 @@
+//! `[output]`: the formats, the time base, the coordinate resolution and
+//! reference system, the offset to projected coordinates.
+
+use super::Checker;
+use crate::geometry::DVec3;
+use crate::survey::{Formats, KeyPath, OutputSettings, RawSurvey};
+
+/// Checks `[output]` (the LAS scale against the survey's extent is checked
+/// once the scene and the lines are known, by [`crate::world`]).
+pub(crate) fn output(c: &mut Checker, raw: &RawSurvey) -> OutputSettings {
+    let root = KeyPath::root();
+    let o = &raw.output;
+    let op = root.key("output");
+    let mut formats = Formats {
+        las: false,
+        las_waveform: false,
+        laz: false,
+        ply: false,
+        xyz: false,
+    };
+    match &o.formats {
+        None => formats.las = true,
+        Some(list) => {
+            for (i, f) in list.iter().enumerate() {
+                match f.as_str() {
+                    "las" if formats.las_waveform => c.err(
+                        op.key("formats").index(i),
+                        "\"las\" and \"las-waveform\" both write points.las; keep one",
+                    ),
+                    "las" => formats.las = true,
+                    "las-waveform" if formats.las && !formats.las_waveform => c.err(
+                        op.key("formats").index(i),
+                        "\"las\" and \"las-waveform\" both write points.las; keep one",
+                    ),
+                    "las-waveform" => {
+                        formats.las = true;
+                        formats.las_waveform = true;
+                    }
+                    "laz" => formats.laz = true,
+                    "ply" => formats.ply = true,
+                    "xyz" => formats.xyz = true,
+                    other => c.err(
+                        op.key("formats").index(i),
+                        format!(
+                            "unknown format '{other}'; expected \"las\", \"las-waveform\", \
+                             \"laz\", \"ply\" or \"xyz\""
+                        ),
+                    ),
+                }
+            }
+        }
+    }
+    let (crs_wkt, crs_epsg) = match (&o.crs, &o.crs_wkt) {
+        (Some(_), Some(_)) => {
+            c.err(
+                op.key("crs_wkt"),
+                "give the CRS once: `crs = \"EPSG:code\"` or `crs_wkt`, not both",
+            );
+            (None, None)
+        }
+        (Some(text), None) => match crate::output::crs::parse_epsg(text) {
+            None => {
+                c.err(
+                    op.key("crs"),
+                    format!("must be \"EPSG:code\", got '{text}'"),
+                );
+                (None, None)
+            }
+            Some(code) => match crate::output::crs::wkt_for_epsg(code) {
+                Some(wkt) => (Some(wkt), Some(code)),
+                None => {
+                    c.err(
+                        op.key("crs"),
+                        format!(
+                            "EPSG:{code} is not in the built-in table (UTM zones on WGS 84 \
+                             32601–32660/32701–32760, ETRS89 25828–25838, NAD83 \
+                             26901–26923, ETRS-TM35FIN 3067); give its WKT with `crs_wkt` \
+                             instead (e.g. from epsg.io or `projinfo EPSG:{code} -o WKT1_GDAL`)"
+                        ),
+                    );
+                    (None, None)
+                }
+            },
+        },
+        (None, Some(wkt)) => match crate::output::crs::check_wkt(wkt) {
+            Ok(()) => (Some(wkt.trim().to_string()), None),
+            Err(m) => {
+                c.err(op.key("crs_wkt"), m);
+                (None, None)
+            }
+        },
+        (None, None) => (None, None),
+    };
+    let offset_m = match &o.offset_m {
+        None => DVec3::ZERO,
+        Some(v) => c
+            .point(op.key("offset_m"), &Some(v.clone()))
+            .unwrap_or(DVec3::ZERO),
+    };
+    if formats.las_waveform {
+        let bin_ps = raw.receiver.bin_ps.unwrap_or(500.0);
+        if bin_ps.fract() != 0.0 || bin_ps > f64::from(u32::MAX) {
+            c.err(
+                root.key("receiver").key("bin_ps"),
+                format!(
+                    "must be a whole number of picoseconds for \"las-waveform\" output (the \
+                     LAS waveform descriptor stores the sample spacing in whole ps), got {bin_ps}"
+                ),
+            );
+        }
+    }
+    // Inertial systems record at 50 to 2000 Hz; finer rows add bytes,
+    // not information.
+    let trajectory_interval_s = c.number(
+        op.key("trajectory_interval_s"),
+        o.trajectory_interval_s,
+        0.001,
+        1e-4,
+        false,
+        3600.0,
+        " s",
+    );
+    let gps_start_time_s = o.gps_start_time_s.map(|g| {
+        c.number(
+            op.key("gps_start_time_s"),
+            Some(g),
+            0.0,
+            0.0,
+            false,
+            1e10,
+            " s",
+        )
+    });
+    let las_scale_m = c.number(
+        op.key("las_scale_m"),
+        o.las_scale_m,
+        0.001,
+        0.0,
+        true,
+        1.0,
+        " m",
+    );
+    OutputSettings {
+        formats,
+        trajectory_interval_s,
+        gps_start_time_s,
+        las_scale_m,
+        extra_bytes: o.extra_bytes.unwrap_or(true),
+        crs_wkt,
+        crs_epsg,
+        offset_m,
+    }
+}

@@ -1,0 +1,290 @@
+//! `[scanner]` and `[receiver]`: the laser, the mirror, the beam, the
+//! waveform's sampling and noise, and echo detection.
+
+use super::Checker;
+use crate::detection::{DetectorConfig, ReturnSelection};
+use crate::message::num;
+use crate::sensor::scanner::{Mirror, MirrorProfile};
+use crate::survey::{
+    KeyPath, MAX_PRF_HZ, MAX_PULSE_SAMPLES, MAX_RANGE_M, MAX_WINDOW_SAMPLES, MIN_PULSE_FWHM_NS,
+    RawSurvey, ScannerSettings,
+};
+use crate::waveform::{PulseShape, ReceiverConfig, range_to_bin};
+
+/// The checked `[scanner]` and `[receiver]`.
+pub(crate) struct Sensor {
+    pub scanner: ScannerSettings,
+    pub receiver: ReceiverConfig,
+    pub detector: DetectorConfig,
+    pub speckle_looks: Option<f64>,
+    pub intensity_gain: f64,
+}
+
+/// Checks `[scanner]` and `[receiver]`.
+pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
+    let root = KeyPath::root();
+    // [scanner]
+    let s = &raw.scanner;
+    let sp = root.key("scanner");
+    let prf_hz = c.positive(sp.key("prf_hz"), s.prf_hz, 100_000.0, " Hz");
+    if prf_hz > MAX_PRF_HZ {
+        c.err(
+            sp.key("prf_hz"),
+            format!(
+                "must be at most {MAX_PRF_HZ} Hz (10 MHz, beyond any airborne scanner), \
+                 got {prf_hz:e}"
+            ),
+        );
+    }
+    let scan_frequency_hz = c.positive(
+        sp.key("scan_frequency_hz"),
+        s.scan_frequency_hz,
+        50.0,
+        " Hz",
+    );
+    if scan_frequency_hz > prf_hz / 4.0 {
+        c.err(
+            sp.key("scan_frequency_hz"),
+            format!(
+                "must be at most prf_hz / 4 = {} Hz, got {}: the mirror would sweep its \
+                 scan line with fewer than two pulses",
+                num(prf_hz / 4.0),
+                num(scan_frequency_hz)
+            ),
+        );
+    }
+    let scan_angle_given = match s.scan_angle_deg {
+        Some(a) if a >= 90.0 => {
+            c.err(
+                sp.key("scan_angle_deg"),
+                format!(
+                    "must be between 0 and 89°, got {a}: at 90° or more from nadir the beam \
+                     points at or above the horizon and meets no ground"
+                ),
+            );
+            None
+        }
+        other => other,
+    };
+    let scan_angle_deg = c.number(
+        sp.key("scan_angle_deg"),
+        scan_angle_given,
+        20.0,
+        0.0,
+        false,
+        89.0,
+        "°",
+    );
+    let profile = match s.mirror.as_deref() {
+        None | Some("triangle") => MirrorProfile::Triangle,
+        Some("sine") | Some("sinusoidal") => MirrorProfile::Sine,
+        Some(other) => {
+            c.err(
+                sp.key("mirror"),
+                format!("unknown mirror '{other}'; expected \"triangle\" or \"sine\""),
+            );
+            MirrorProfile::Triangle
+        }
+    };
+    let divergence_mrad = c.number(
+        sp.key("divergence_mrad"),
+        s.divergence_mrad,
+        0.3,
+        0.0,
+        false,
+        100.0,
+        " mrad",
+    );
+    let subrays = c.count(sp.key("subrays"), s.subrays, 19, 1, 10_000) as usize;
+    let pulse_fwhm_ns = match s.pulse_fwhm_ns {
+        Some(v) if v > 0.0 && v < MIN_PULSE_FWHM_NS => {
+            let hint = if v < 1e-6 {
+                format!(
+                    ": the key is in nanoseconds and {} looks like seconds ({} ns)",
+                    num(v),
+                    num(v * 1e9)
+                )
+            } else {
+                String::new()
+            };
+            c.err(
+                sp.key("pulse_fwhm_ns"),
+                format!(
+                    "must be at least {MIN_PULSE_FWHM_NS} ns (airborne pulses last 1 to 10 \
+                     ns), got {}{hint}",
+                    num(v)
+                ),
+            );
+            None
+        }
+        other => Some(c.number(
+            sp.key("pulse_fwhm_ns"),
+            other,
+            4.0,
+            0.0,
+            true,
+            1000.0,
+            " ns",
+        )),
+    };
+    let pulse_ok = pulse_fwhm_ns.is_some();
+    let pulse_fwhm_ns = pulse_fwhm_ns.unwrap_or(4.0);
+    let pulse = match s.pulse_shape.as_deref() {
+        None | Some("gaussian") => PulseShape::Gaussian {
+            fwhm_s: pulse_fwhm_ns * 1e-9,
+        },
+        Some("rise-tail") | Some("rise_tail") => PulseShape::RiseTail {
+            fwhm_s: pulse_fwhm_ns * 1e-9,
+        },
+        Some(other) => {
+            c.err(
+                sp.key("pulse_shape"),
+                format!("unknown pulse shape '{other}'; expected \"gaussian\" or \"rise-tail\""),
+            );
+            PulseShape::Gaussian {
+                fwhm_s: pulse_fwhm_ns * 1e-9,
+            }
+        }
+    };
+    let max_returns = c.count(sp.key("max_returns"), s.max_returns, 5, 1, 15) as usize;
+    let selection = match s.return_selection.as_deref() {
+        None => ReturnSelection::default(),
+        Some(name) => ReturnSelection::from_name(name).unwrap_or_else(|| {
+            c.err(
+                sp.key("return_selection"),
+                format!(
+                    "unknown rule '{name}'; expected \"first-and-last\" (the default: the \
+                     first max_returns − 1 echoes and the last) or \"first\""
+                ),
+            );
+            ReturnSelection::default()
+        }),
+    };
+    let min_range_m = c.number(
+        sp.key("min_range_m"),
+        s.min_range_m,
+        1.0,
+        0.0,
+        false,
+        f64::INFINITY,
+        " m",
+    );
+    let max_range_m = c.number(
+        sp.key("max_range_m"),
+        s.max_range_m,
+        10_000.0,
+        0.0,
+        true,
+        MAX_RANGE_M,
+        " m",
+    );
+    if max_range_m <= min_range_m {
+        c.err(
+            sp.key("max_range_m"),
+            format!("must be greater than min_range_m ({min_range_m} m)"),
+        );
+    }
+    let reference_range_m = c.number(
+        sp.key("reference_range_m"),
+        s.reference_range_m,
+        1000.0,
+        1.0,
+        false,
+        MAX_RANGE_M,
+        " m",
+    );
+    let wavelength_nm = c.positive(sp.key("wavelength_nm"), s.wavelength_nm, 1064.0, " nm");
+
+    // [receiver]
+    let r = &raw.receiver;
+    let rp = root.key("receiver");
+    let bin_ps = c.number(rp.key("bin_ps"), r.bin_ps, 500.0, 0.0, true, 1e6, " ps");
+    // Amplitudes are in units of the echo of a white plane filling the
+    // beam at the reference range: a noise or path radiance above it
+    // would hide every echo.
+    let noise = c.number(rp.key("noise"), r.noise, 0.0, 0.0, false, 1.0, "");
+    let atmosphere = c.number(rp.key("atmosphere"), r.atmosphere, 0.0, 0.0, false, 1.0, "");
+    let speckle_looks = c.positive(rp.key("speckle_looks"), r.speckle_looks, 1.0, "");
+    let threshold_sigma = c.positive(rp.key("threshold_sigma"), r.threshold_sigma, 4.0, "");
+    let min_amplitude = c.positive(rp.key("min_amplitude"), r.min_amplitude, 0.005, "");
+    let intensity_gain = c.positive(rp.key("intensity_gain"), r.intensity_gain, 10_000.0, "");
+    if pulse_ok && bin_ps * 1e-3 > pulse_fwhm_ns {
+        c.err(
+            rp.key("bin_ps"),
+            format!(
+                "a {} ps bin cannot sample a {} ns pulse; use a bin at most the pulse width",
+                num(bin_ps),
+                num(pulse_fwhm_ns)
+            ),
+        );
+    }
+    // The work of a pulse grows with the samples of the pulse shape
+    // (each return is convolved with it) and its memory with the
+    // samples of the range window.
+    if pulse_ok {
+        let (before, after) = pulse.support_s();
+        let shape_samples = (before + after) / (bin_ps * 1e-12);
+        let window_samples =
+            range_to_bin(max_range_m - min_range_m, bin_ps * 1e-12) + shape_samples;
+        let finest = ((before + after) / MAX_PULSE_SAMPLES as f64 * 1e12)
+            .max(range_to_bin(max_range_m - min_range_m, 1e-12) / MAX_WINDOW_SAMPLES as f64);
+        if shape_samples > MAX_PULSE_SAMPLES as f64 {
+            c.err(
+                rp.key("bin_ps"),
+                format!(
+                    "a {} ps bin samples the {} ns pulse (its shape spans {:.1} ns) with {} \
+                     samples; at most {MAX_PULSE_SAMPLES}: use bin_ps of at least {:.2} ps",
+                    num(bin_ps),
+                    num(pulse_fwhm_ns),
+                    (before + after) * 1e9,
+                    num(shape_samples.round()),
+                    finest
+                ),
+            );
+        } else if window_samples > MAX_WINDOW_SAMPLES as f64 {
+            c.err(
+                rp.key("bin_ps"),
+                format!(
+                    "a {} ps bin needs {} samples for the range window from \
+                     scanner.min_range_m to scanner.max_range_m ({} m); at most \
+                     {MAX_WINDOW_SAMPLES}: use bin_ps of at least {:.2} ps or narrow the \
+                     range window",
+                    num(bin_ps),
+                    num(window_samples.round()),
+                    num(max_range_m - min_range_m),
+                    finest
+                ),
+            );
+        }
+    }
+    Sensor {
+        scanner: ScannerSettings {
+            prf_hz,
+            mirror: Mirror {
+                profile,
+                scan_frequency_hz,
+                scan_half_angle_rad: scan_angle_deg.to_radians(),
+            },
+            divergence_rad: divergence_mrad * 1e-3,
+            subrays,
+            min_range_m,
+            max_range_m,
+            wavelength_nm,
+        },
+        receiver: ReceiverConfig {
+            bin_s: bin_ps * 1e-12,
+            pulse,
+            noise_sigma: noise,
+            atmosphere,
+            reference_range_m,
+        },
+        detector: DetectorConfig {
+            threshold_sigma,
+            min_amplitude,
+            max_returns,
+            selection,
+        },
+        speckle_looks: r.speckle.unwrap_or(false).then_some(speckle_looks),
+        intensity_gain,
+    }
+}

@@ -1,0 +1,199 @@
+//! The scene of a survey built from its entries: polygons, meshes,
+//! terrains and point clouds (read by [`crate::io`]), trees, then the
+//! forests' trees placed on the ground of an index of all of that, and the
+//! index of everything.
+
+use crate::accel::{Bvh, ground_below};
+use crate::geometry::DVec3;
+use crate::geometry::MAX_COORDINATE_M;
+use crate::message::num;
+use crate::scene::forest::{generate, polygon_area};
+use crate::scene::{Primitive, Scene, Shape};
+use crate::survey::spec::TerrainSource;
+use crate::survey::{KeyPath, Survey};
+
+/// What [`build`] makes.
+pub(super) struct Built {
+    /// The index, owning the scene.
+    pub index: Bvh,
+    /// Trees placed by each `[[forest]]` entry.
+    pub forest_trees: Vec<usize>,
+    /// Warnings about the stands.
+    pub warnings: Vec<String>,
+    /// Time spent building the index, s.
+    pub index_time_s: f64,
+}
+
+/// The index of `scene`, and how long it took to build.
+fn index(scene: Scene) -> (Bvh, f64) {
+    let t = std::time::Instant::now();
+    let index = Bvh::build(scene);
+    (index, t.elapsed().as_secs_f64())
+}
+
+/// Builds and indexes the scene of `survey`, adding its problems to
+/// `problems`.
+pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> Built {
+    let root = KeyPath::root();
+    let spec = &survey.scene_spec;
+    let mut scene = Scene::default();
+    let mut owners: Vec<(KeyPath, usize)> = Vec::new();
+    for p in &spec.polygons {
+        let key = root.key("polygon").index(p.index);
+        owners.push((key.key("vertices_m"), scene.primitives.len()));
+        let material = scene.add_material(p.material.clone());
+        let object = scene.add_object(format!("polygon[{}]", p.index));
+        scene.primitives.push(Primitive {
+            shape: Shape::Polygon(Box::new(p.polygon.clone())),
+            material,
+            class: p.class,
+            object,
+        });
+    }
+    for m in &spec.meshes {
+        let key = root.key("mesh").index(m.index);
+        owners.push((key.key("offset_m"), scene.primitives.len()));
+        let loaded = if m.gltf {
+            crate::io::gltf::load_gltf(&m.file, &m.placement, &survey.materials, &mut scene)
+        } else {
+            crate::io::obj::load_obj(&m.file, &m.placement, &survey.materials, &mut scene)
+        };
+        if let Err(e) = loaded {
+            let at = match &e {
+                crate::io::obj::MeshError::UnmatchedClassPattern { pattern, .. } => {
+                    key.key("classes").key(pattern)
+                }
+                _ => key.key("file"),
+            };
+            problems.push((at, e.to_string()));
+        }
+    }
+    for t in &spec.terrains {
+        let key = root.key("terrain").index(t.index);
+        owners.push((key.clone(), scene.primitives.len()));
+        let (grid, name) = match &t.source {
+            TerrainSource::File(path, name) => (
+                crate::io::raster::read_raster(path).map_err(|e| (key.key("file"), e)),
+                format!("terrain[{}]:{name}", t.index),
+            ),
+            TerrainSource::Fbm(fbm) => (
+                crate::scene::terrain::generate_fbm(fbm).map_err(|e| (key.key("resolution_m"), e)),
+                format!("terrain[{}]:fbm", t.index),
+            ),
+        };
+        match grid {
+            Ok(mut grid) => {
+                grid.shift(t.offset_m);
+                let m = scene.add_material(t.material.clone());
+                crate::scene::terrain::add_terrain(&mut scene, grid, m, t.class, name);
+            }
+            Err((at, e)) => problems.push((at, e.to_string())),
+        }
+    }
+    for cl in &spec.clouds {
+        let key = root.key("point_cloud").index(cl.index);
+        owners.push((key.key("offset_m"), scene.primitives.len()));
+        let placement = crate::scene::cloud::CloudPlacement {
+            voxel_m: cl.voxel_m,
+            offset_m: cl.offset_m,
+            material: scene.add_material(cl.material.clone()),
+            class: cl.class,
+        };
+        if let Err(e) = crate::io::cloud::load_point_cloud(&cl.file, &placement, &mut scene) {
+            problems.push((key.key("file"), e.to_string()));
+        }
+    }
+    let whorl = spec.whorl_spacing_m;
+    for (i, tree) in &spec.trees {
+        owners.push((
+            root.key("tree").index(*i).key("position_m"),
+            scene.primitives.len(),
+        ));
+        scene.add_tree(tree, whorl, format!("tree[{i}]"));
+    }
+    let mut forest_trees = Vec::new();
+    let mut warnings = Vec::new();
+    if spec.forests.is_empty() {
+        check_far(&scene, &owners, problems);
+        let (index, index_time_s) = index(scene);
+        return Built {
+            index,
+            forest_trees,
+            warnings,
+            index_time_s,
+        };
+    }
+    // Trees stand on the ground (or road, water) below them, else on any
+    // surface, else at z = 0.
+    let ground = Bvh::build(scene.clone());
+    let ground_z = |x: f64, y: f64| ground_below(&ground, DVec3::new(x, y, 1e6)).max(-1e5);
+    for (i, f) in spec.forests.iter().enumerate() {
+        let Some(f) = f else {
+            forest_trees.push(0);
+            continue;
+        };
+        let fp = root.key("forest").index(i);
+        let trees = generate(f, &ground_z);
+        let wanted = (polygon_area(&f.area) / 10_000.0 * f.stems_per_ha).round() as usize;
+        if trees.len() < wanted {
+            warnings.push(format!(
+                "key `{fp}`: placed {} of {wanted} trees: min_spacing_m = {} m leaves no room \
+                 for {} stems/ha",
+                trees.len(),
+                f.min_spacing_m,
+                f.stems_per_ha
+            ));
+        }
+        forest_trees.push(trees.len());
+        owners.push((fp.clone(), scene.primitives.len()));
+        for (j, tree) in trees.iter().enumerate() {
+            scene.add_tree(tree, whorl, format!("forest[{i}].tree[{j}]"));
+        }
+    }
+    check_far(&scene, &owners, problems);
+    let (index, index_time_s) = index(scene);
+    Built {
+        index,
+        forest_trees,
+        warnings,
+        index_time_s,
+    }
+}
+
+/// Refuses primitives beyond any projected coordinate system, naming the
+/// first entry that put one there: they cannot be traced in the index's
+/// f32 boxes.
+fn check_far(scene: &Scene, owners: &[(KeyPath, usize)], problems: &mut Vec<(KeyPath, String)>) {
+    let bounds = scene.bounds();
+    if bounds.is_empty() {
+        return;
+    }
+    let far = bounds.min.abs().max(bounds.max.abs()).max_element();
+    if far <= MAX_COORDINATE_M {
+        return;
+    }
+    let reach = |range: std::ops::Range<usize>| {
+        scene.primitives[range].iter().fold(0.0f64, |m, p| {
+            let b = p.bounds();
+            m.max(b.min.abs().max(b.max.abs()).max_element())
+        })
+    };
+    let key = owners
+        .iter()
+        .enumerate()
+        .find(|(k, (_, from))| {
+            let to = owners
+                .get(k + 1)
+                .map_or(scene.primitives.len(), |(_, t)| *t);
+            reach(*from..to) > MAX_COORDINATE_M
+        })
+        .map_or_else(KeyPath::root, |(_, (key, _))| key.clone());
+    problems.push((
+        key,
+        format!(
+            "this part of the scene reaches {} m from the origin: coordinates must lie within \
+             ±{MAX_COORDINATE_M:e} m (shift them, e.g. by a mesh's offset_m)",
+            num(far)
+        ),
+    ));
+}
