@@ -26,6 +26,10 @@ use std::path::{Path, PathBuf};
 
 use crate::geometry::DVec3;
 
+/// [`PointRecord::object_id`] of an echo no object contributed to
+/// (receiver noise), as the point files write it.
+pub const NO_OBJECT: u32 = u32::MAX;
+
 /// One point of the output cloud: an echo with its attributes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PointRecord {
@@ -64,7 +68,8 @@ pub struct PointRecord {
     pub point_source_id: u16,
     /// Pulse index within the flight line.
     pub pulse_index: u64,
-    /// Scene object that returned most of the echo's energy.
+    /// Scene object that returned most of the echo's energy;
+    /// [`NO_OBJECT`] for receiver noise.
     pub object_id: u32,
     /// Angle between the beam axis and the normal of the surface that
     /// returned most of the echo's energy (the normal where the first sub-ray

@@ -298,6 +298,7 @@ impl Beam {
 
     /// The pattern of a pulse, drawn from the pulse's beam stream (the
     /// central ray with one sub-ray: nothing is drawn).
+    #[inline]
     pub fn for_pulse(&self, rng: impl FnOnce() -> Stream) -> &BeamPattern {
         if !self.sampled {
             return &self.variants[0];

@@ -1,0 +1,402 @@
+//! The simulation driver: pulses in, points out.
+//!
+//! A pulse `k` of a flight line runs through the stages of `sim/pulse.rs`: pose
+//! and mirror angle at `t_k` → sub-rays → closest hits → Eq. 2 per sub-ray
+//! (through the crowns, with speckle) → waveform → echoes → georeferenced
+//! points (Eq. 1 on the central ray) with their ground truth (`sim/truth.rs`).
+//! Pulses are independent; blocks of [`BLOCK_PULSES`] run in parallel on
+//! the run's threads and are handed to the sinks in pulse order by the
+//! [`Executor`], so the output is the same for any number of threads and
+//! memory does not grow with the length of the flight.
+
+mod executor;
+mod frames;
+mod pulse;
+mod scratch;
+mod truth;
+
+use std::io;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+use crate::accel::RayCaster;
+use crate::canopy::CanopyConfig;
+use crate::detection::Detector;
+use crate::geometry::DMat3;
+use crate::output::{PointRecord, PointSink, WaveformBlock, WaveformPacket};
+use crate::radiometry::Speckle;
+use crate::sensor::beam::Beam;
+use crate::sensor::platform::FlightLine;
+use crate::survey::Survey;
+use crate::waveform::Receiver;
+use crate::world::World;
+pub use executor::{Executor, InOrder};
+pub use scratch::Scratch;
+pub use truth::ReturnSource;
+
+/// ASPRS class of an echo no surface contributed to (receiver noise).
+pub const NOISE_CLASS: u8 = 7;
+
+/// [`PointRecord::component`] of an echo from a surface.
+pub const COMPONENT_SURFACE: u8 = 0;
+/// [`PointRecord::component`] of an echo from foliage in a crown.
+pub const COMPONENT_FOLIAGE: u8 = 1;
+/// [`PointRecord::component`] of an echo from a trunk.
+pub const COMPONENT_TRUNK: u8 = 2;
+
+/// Pulses per parallel work unit.
+pub const BLOCK_PULSES: u64 = 2048;
+
+/// Counts gathered while simulating.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RunCounts {
+    /// Pulses emitted.
+    pub pulses: u64,
+    /// Points written.
+    pub points: u64,
+    /// Pulses with at least one echo.
+    pub pulses_with_echo: u64,
+    /// Points by return number (index 0 = first return).
+    pub points_by_return: [u64; 15],
+}
+
+impl RunCounts {
+    /// Adds the counts of `o`.
+    pub fn add(&mut self, o: &RunCounts) {
+        self.pulses += o.pulses;
+        self.points += o.points;
+        self.pulses_with_echo += o.pulses_with_echo;
+        for (a, b) in self.points_by_return.iter_mut().zip(o.points_by_return) {
+            *a += b;
+        }
+    }
+}
+
+/// Everything needed to simulate pulses of one survey.
+pub struct Simulator<'a> {
+    survey: &'a Survey,
+    caster: &'a dyn RayCaster,
+    lines: &'a [FlightLine],
+    receiver: Receiver,
+    detector: Detector,
+    beam: Beam,
+    /// Range difference between neighbouring sub-rays that makes their
+    /// cells be sampled again: the range resolution, `c·FWHM/2` (closer
+    /// surfaces merge into one echo whatever their share).
+    discontinuity_m: f64,
+    speckle: Option<Speckle>,
+    canopy: CanopyConfig,
+    time_offset_s: f64,
+    /// Keep each pulse's waveform for the sinks (full-waveform output).
+    record_waveforms: bool,
+    /// Boresight misalignment of the real scanner (identity without).
+    boresight: DMat3,
+    /// True when no navigation or measurement error is configured.
+    exact_georeferencing: bool,
+}
+
+impl<'a> Simulator<'a> {
+    /// Prepares the receiver, detector and beam pattern of `survey` over the
+    /// scene indexed by `caster`.
+    pub fn new(survey: &'a Survey, world: &'a World) -> Self {
+        let receiver = Receiver::new(survey.receiver.clone());
+        let detector = Detector::new(survey.detector.clone(), &receiver);
+        Self {
+            survey,
+            caster: world.index(),
+            lines: &world.lines,
+            beam: Beam::new(survey.scanner.subrays, survey.scanner.divergence_rad),
+            discontinuity_m: crate::geometry::SPEED_OF_LIGHT_MPS * survey.receiver.pulse.fwhm_s()
+                / 2.0,
+            speckle: survey.speckle_looks.and_then(Speckle::new),
+            canopy: survey.canopy,
+            boresight: survey.navigation.boresight(),
+            exact_georeferencing: survey.navigation.is_zero(),
+            receiver,
+            detector,
+            time_offset_s: survey.output.gps_start_time_s.unwrap_or(0.0),
+            record_waveforms: false,
+        }
+    }
+
+    /// Makes [`Simulator::run`] hand every pulse's recorded waveform to the
+    /// sinks with its points ([`PointSink::write_block`]); off by default,
+    /// when it costs nothing.
+    pub fn with_waveforms(mut self, on: bool) -> Self {
+        self.record_waveforms = on;
+        self
+    }
+
+    /// The survey.
+    pub fn survey(&self) -> &Survey {
+        self.survey
+    }
+
+    /// The receiver.
+    pub fn receiver(&self) -> &Receiver {
+        &self.receiver
+    }
+
+    /// The echo detector.
+    pub fn detector(&self) -> &Detector {
+        &self.detector
+    }
+
+    /// Time of emission of pulse `k` of `line` since the flight start, s
+    /// (`t_k = t_0 + k / PRF`, computed from the integer tick).
+    #[inline]
+    pub fn pulse_time(&self, line: &FlightLine, k: u64) -> f64 {
+        line.start_time_s + k as f64 / self.survey.scanner.prf_hz
+    }
+
+    /// Simulates pulses `[k0, k1)` of `line`.
+    pub fn simulate_block(
+        &self,
+        line: &FlightLine,
+        k0: u64,
+        k1: u64,
+        scratch: &mut Scratch,
+    ) -> (Vec<PointRecord>, RunCounts) {
+        self.simulate_block_recording(line, k0, k1, scratch, None)
+    }
+
+    /// Simulates pulses `[k0, k1)` of `line`; with `waveforms`, also keeps
+    /// the waveform of every pulse that has an echo there (the whole window
+    /// the receiver synthesised: from before the first sub-ray return by the
+    /// pulse's rise to after the last by its tail, see
+    /// [`Receiver::synthesize`]).
+    // Kept out of line: profiles (scripts/profile_bench.sh) count the
+    // instructions under it, whatever the inlining around it.
+    #[inline(never)]
+    pub fn simulate_block_recording(
+        &self,
+        line: &FlightLine,
+        k0: u64,
+        k1: u64,
+        scratch: &mut Scratch,
+        mut waveforms: Option<&mut WaveformBlock>,
+    ) -> (Vec<PointRecord>, RunCounts) {
+        let mut points = Vec::with_capacity(((k1 - k0) as usize) * 2);
+        let mut counts = RunCounts::default();
+        let bin_ps = self.survey.receiver.bin_s * 1e12;
+        for k in k0..k1 {
+            let n = self.simulate_pulse(line, k, scratch, &mut points);
+            counts.pulses += 1;
+            if n > 0 {
+                counts.pulses_with_echo += 1;
+                if let Some(w) = waveforms.as_deref_mut() {
+                    let wf = &scratch.waveform;
+                    w.packets.push(WaveformPacket {
+                        point_source_id: (line.index + 1).min(u16::MAX as u32) as u16,
+                        pulse_index: k,
+                        first_sample_ps: wf.first_bin as f64 * bin_ps,
+                        start: w.samples.len(),
+                        len: wf.samples.len(),
+                    });
+                    w.samples.extend(wf.samples.iter().map(|&v| v as f32));
+                }
+            }
+        }
+        counts.points = points.len() as u64;
+        for p in &points {
+            counts.points_by_return[usize::from(p.return_number.clamp(1, 15)) - 1] += 1;
+        }
+        (points, counts)
+    }
+
+    /// Simulates every pulse of every flight line on `threads` threads and
+    /// writes the points, in pulse order, to `sinks`. The calling thread is
+    /// one of the `threads`: it writes each block as soon as the blocks
+    /// before it are written and simulates blocks in between, so one
+    /// thread runs everything in turn on the caller.
+    /// `progress` is called with the number of pulses done so far.
+    /// The sinks are not finished here.
+    pub fn run(
+        &self,
+        threads: usize,
+        sinks: &mut [&mut (dyn PointSink + 'static)],
+        progress: &(dyn Fn(u64) + Sync),
+    ) -> io::Result<RunCounts> {
+        self.run_from(threads, sinks, progress, &RunControl::default())
+            .map(|o| o.counts)
+    }
+
+    /// [`Simulator::run`] from `control.start` on, stopping at the next
+    /// block boundary once `control.stop` is set (checked before every
+    /// block a thread takes; the blocks already simulated are written
+    /// first, as far as they follow each other).
+    /// The counts are those of the pulses simulated by this call; the
+    /// outcome says where it stopped, if it did.
+    pub fn run_from(
+        &self,
+        threads: usize,
+        sinks: &mut [&mut (dyn PointSink + 'static)],
+        progress: &(dyn Fn(u64) + Sync),
+        control: &RunControl<'_>,
+    ) -> io::Result<RunOutcome> {
+        let threads = threads.max(1);
+        // The blocks to simulate, in output order, within the pulse budget
+        // (a block is taken while fewer pulses than the budget precede it).
+        let mut jobs: Vec<(usize, u64, u64)> = Vec::new();
+        let mut budget_end = None;
+        let mut sent = 0u64;
+        'lines: for (l, line) in self.lines.iter().enumerate().skip(control.start.line) {
+            let n = self.survey.pulses_of(line);
+            let mut k = if l == control.start.line {
+                control.start.pulse.min(n)
+            } else {
+                0
+            };
+            while k < n {
+                if control.pulse_budget.is_some_and(|b| sent >= b) {
+                    budget_end = Some(PulsePosition { line: l, pulse: k });
+                    break 'lines;
+                }
+                let k1 = (k + BLOCK_PULSES).min(n);
+                jobs.push((l, k, k1));
+                sent += k1 - k;
+                k = k1;
+            }
+        }
+        let stopped = || control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
+        // Blocks in order to every sink, at most 4 per thread ahead of the
+        // writer (executor.rs).
+        let executor = Executor {
+            threads,
+            window: 4 * threads,
+            stop: &stopped,
+        };
+        let mut writer = Writer {
+            sinks,
+            total: RunCounts::default(),
+            progress,
+        };
+        let done = executor.run(
+            jobs.len(),
+            Scratch::default,
+            |j, scratch| {
+                let (l, k0, k1) = jobs[j];
+                let mut waves = WaveformBlock::default();
+                let record = self.record_waveforms.then_some(&mut waves);
+                let (points, counts) =
+                    self.simulate_block_recording(&self.lines[l], k0, k1, scratch, record);
+                Block {
+                    points,
+                    counts,
+                    waves,
+                }
+            },
+            &mut writer,
+        )?;
+        // Stopped early when blocks remain unwritten; a stop requested
+        // after the last block changes nothing.
+        let stopped_at = match jobs.get(done) {
+            Some(&(l, k0, _)) => Some(PulsePosition { line: l, pulse: k0 }),
+            None => budget_end,
+        };
+        Ok(RunOutcome {
+            counts: writer.total,
+            stopped_at,
+        })
+    }
+}
+
+/// The points, counts and waveforms of one block of pulses.
+struct Block {
+    points: Vec<PointRecord>,
+    counts: RunCounts,
+    waves: WaveformBlock,
+}
+
+/// Writes blocks in pulse order to every sink, counting them.
+struct Writer<'s, 'p> {
+    sinks: &'s mut [&'p mut (dyn PointSink + 'static)],
+    total: RunCounts,
+    progress: &'s (dyn Fn(u64) + Sync),
+}
+
+impl InOrder<Block> for Writer<'_, '_> {
+    type Error = io::Error;
+
+    fn take(&mut self, _: usize, block: Block) -> io::Result<()> {
+        for sink in self.sinks.iter_mut() {
+            sink.write_block(&block.points, &block.waves)?;
+        }
+        self.total.add(&block.counts);
+        Ok(())
+    }
+
+    fn caught_up(&mut self) {
+        (self.progress)(self.total.pulses);
+    }
+}
+
+/// A pulse of a survey: flight line (0-based index) and pulse within it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct PulsePosition {
+    /// Index of the flight line (0 = first).
+    pub line: usize,
+    /// Pulse index within the line.
+    pub pulse: u64,
+}
+
+/// Where [`Simulator::run_from`] starts and what makes it stop early.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunControl<'a> {
+    /// First pulse to simulate (the pulses before it are skipped).
+    pub start: PulsePosition,
+    /// Set (by a signal handler, say) to stop at the next block boundary.
+    pub stop: Option<&'a AtomicBool>,
+    /// Stop once this many pulses were simulated, rounded up to a whole
+    /// block (at the end of a line, where the line ends): a run in slices.
+    pub pulse_budget: Option<u64>,
+}
+
+/// What [`Simulator::run_from`] did.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RunOutcome {
+    /// Counts of the pulses simulated by this call.
+    pub counts: RunCounts,
+    /// The first pulse not simulated when the run was stopped early; `None`
+    /// when it reached the end of the survey.
+    pub stopped_at: Option<PulsePosition>,
+}
+
+/// Simulates a whole survey into memory on `threads` threads: its world
+/// built, every pulse, the points in pulse order. For tests and small
+/// surveys; [`crate::run::run_to_dir`] streams to files instead.
+pub fn simulate_to_memory(survey: &Survey, threads: usize) -> io::Result<Vec<PointRecord>> {
+    let world = World::build(survey)
+        .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
+    simulate_world_to_memory(survey, &world, threads)
+}
+
+/// Simulates a survey over a world already built (its lines perhaps
+/// changed since) into memory on `threads` threads, the points in pulse
+/// order.
+pub fn simulate_world_to_memory(
+    survey: &Survey,
+    world: &World,
+    threads: usize,
+) -> io::Result<Vec<PointRecord>> {
+    let sim = Simulator::new(survey, world);
+    let mut sink = crate::output::MemorySink::default();
+    sim.run(threads, &mut [&mut sink], &|_| {})?;
+    Ok(sink.points)
+}
+
+/// Wall-clock timing helper for summaries.
+#[derive(Debug)]
+pub struct Timer(Instant);
+
+impl Timer {
+    /// Starts timing.
+    pub fn start() -> Self {
+        Self(Instant::now())
+    }
+
+    /// Seconds since the start.
+    pub fn seconds(&self) -> f64 {
+        self.0.elapsed().as_secs_f64()
+    }
+}

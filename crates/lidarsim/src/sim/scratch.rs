@@ -1,0 +1,60 @@
+//! Reusable per-thread buffers of the per-pulse computation.
+
+use super::frames::FrameCache;
+use super::truth::ReturnSource;
+use crate::accel::{PulseTrace, VolumeSpan};
+use crate::detection::{DetectScratch, Echo};
+use crate::geometry::DVec3;
+use crate::waveform::{Return, Waveform};
+
+/// Reusable per-thread buffers of the per-pulse computation; after
+/// [`super::Simulator::simulate_pulse`] they hold that pulse's waveform,
+/// echoes and sub-ray returns.
+#[derive(Default)]
+pub struct Scratch {
+    /// Sub-ray directions in the world frame.
+    pub(super) dirs: Vec<DVec3>,
+    /// Their closest hits and crown spans.
+    pub(super) trace: PulseTrace,
+    /// Which sub-rays' cells are sampled again.
+    pub(super) refine: Vec<bool>,
+    /// The fine samples of those cells: undeflected direction and share.
+    pub(super) fine: Vec<(DVec3, f64)>,
+    /// Their directions in the world frame.
+    pub(super) fine_dirs: Vec<DVec3>,
+    /// Their closest hits and crown spans.
+    pub(super) fine_trace: PulseTrace,
+    /// Working storage of the traversal.
+    pub(super) spans: Vec<VolumeSpan>,
+    /// Sub-ray returns: range and power.
+    pub(super) returns: Vec<Return>,
+    /// Where each return came from, parallel to `returns`.
+    pub(super) sources: Vec<ReturnSource>,
+    /// The received signal.
+    pub(super) waveform: Waveform,
+    /// Working storage of the detector.
+    pub(super) detect: DetectScratch,
+    /// The detected echoes.
+    pub(super) echoes: Vec<Echo>,
+    /// Energy per primitive within one echo.
+    pub(super) energy_by_prim: Vec<(u32, f64)>,
+    /// Frames of the last pulse.
+    pub(super) frames: FrameCache,
+}
+
+impl Scratch {
+    /// The waveform of the last simulated pulse.
+    pub fn waveform(&self) -> &Waveform {
+        &self.waveform
+    }
+
+    /// The echoes of the last simulated pulse.
+    pub fn echoes(&self) -> &[Echo] {
+        &self.echoes
+    }
+
+    /// The sub-ray returns of the last simulated pulse.
+    pub fn returns(&self) -> &[Return] {
+        &self.returns
+    }
+}
