@@ -108,6 +108,32 @@ impl Aabb {
     pub fn contains(&self, p: DVec3, tol: f64) -> bool {
         p.cmpge(self.min - DVec3::splat(tol)).all() && p.cmple(self.max + DVec3::splat(tol)).all()
     }
+
+    /// The interval `[t0, t1]` of `ray.origin + t·ray.dir` inside the box,
+    /// within `[t_min, t_max]`, if not empty: the slab test (Kay & Kajiya
+    /// 1986), the one ray–box test in f64. On each axis the line crosses
+    /// the box's planes at `(min − o)/d` and `(max − o)/d`; a line
+    /// parallel to a pair of planes lies between them or never meets the
+    /// box.
+    #[inline]
+    pub fn ray_interval(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
+        let mut t0 = t_min;
+        let mut t1 = t_max;
+        for k in 0..3 {
+            let (o, d) = (ray.origin[k], ray.dir[k]);
+            if d == 0.0 {
+                if o < self.min[k] || o > self.max[k] {
+                    return None;
+                }
+                continue;
+            }
+            let a = (self.min[k] - o) / d;
+            let b = (self.max[k] - o) / d;
+            t0 = t0.max(a.min(b));
+            t1 = t1.min(a.max(b));
+        }
+        (t0 <= t1).then_some((t0, t1))
+    }
 }
 
 /// Right-handed rotation by `a` radians about the world/body x axis.

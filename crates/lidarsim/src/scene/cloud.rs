@@ -25,25 +25,13 @@ pub struct Voxel {
 
 impl Voxel {
     /// Distance to where the ray enters the box, within `(t_min, t_max)`
-    /// (slab test, Kay & Kajiya 1986). A ray starting inside does not hit.
+    /// ([`Aabb::ray_interval`]). A ray starting inside does not hit.
     #[inline]
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
-        let mut t0 = f64::NEG_INFINITY;
-        let mut t1 = f64::INFINITY;
-        for k in 0..3 {
-            let (o, d) = (ray.origin[k], ray.dir[k]);
-            if d == 0.0 {
-                if o < self.bounds.min[k] || o > self.bounds.max[k] {
-                    return None;
-                }
-                continue;
-            }
-            let a = (self.bounds.min[k] - o) / d;
-            let b = (self.bounds.max[k] - o) / d;
-            t0 = t0.max(a.min(b));
-            t1 = t1.min(a.max(b));
-        }
-        (t0 <= t1 && t0 > t_min && t0 < t_max).then_some(t0)
+        let (t0, _) = self
+            .bounds
+            .ray_interval(ray, f64::NEG_INFINITY, f64::INFINITY)?;
+        (t0 > t_min && t0 < t_max).then_some(t0)
     }
 
     /// Outward normal of the face nearest to `p`.

@@ -1,5 +1,6 @@
-//! Terrain: height grids from GeoTIFF DEMs, ESRI ASCII grids or a
-//! procedural fBm generator, intersected as a height field.
+//! Terrain: height grids (read by [`crate::io::raster`] from GeoTIFF DEMs
+//! and ESRI ASCII grids, or made by the procedural fBm generator here),
+//! intersected as a height field.
 //!
 //! A [`HeightGrid`] holds one height per grid node, the nodes being the
 //! pixel (cell) centres of the raster, south-west node first, rows running
@@ -12,31 +13,18 @@
 //! The grid is shared (`Arc`) by [`TerrainTile`] primitives of
 //! [`TILE_CELLS`]² cells each; the BVH culls tiles by their boxes and a tile
 //! walks the cells its ray crosses in order (a 2-D DDA, Amanatides & Woo
-//! 1987), testing the two triangles of each cell exactly (Möller &
-//! Trumbore 1997). The first cell with a hit holds the closest hit. A
+//! 1987), testing the two triangles of each cell with the scene's one
+//! ray–triangle test ([`Triangle::intersect`], watertight on the edges the
+//! cells share). The first cell with a hit holds the closest hit. A
 //! 4000 × 4000 DEM costs its heights as `f32` (64 MB) and 62 500 tiles,
 //! where 32 M separate triangle primitives would take several gigabytes.
-//!
-//! GeoTIFF (GeoTIFF 1.1, OGC 19-008r4): the pixel grid comes from
-//! `ModelPixelScaleTag` + one `ModelTiepointTag`, or from a
-//! `ModelTransformationTag` without rotation; `GTRasterTypeGeoKey`
-//! (1025) says whether raster coordinates `(I, J)` name the corner of a pixel
-//! (`PixelIsArea`, the default: the centre of pixel `(i, j)` is at raster
-//! `(i + ½, j + ½)`) or its centre (`PixelIsPoint`: at `(i, j)`). Nodata is
-//! GDAL's `GDAL_NODATA` tag (42113) and NaN. Heights are the sample values
-//! in the file's vertical unit (taken as metres), as GDAL reads them.
-//!
-//! ESRI ASCII grid: header keys `ncols`, `nrows`, `xllcorner`|`xllcenter`,
-//! `yllcorner`|`yllcenter`, `cellsize` (or GDAL's `dx` and `dy` for
-//! rectangular cells), optional `NODATA_value`; then
-//! `nrows` rows of `ncols` values, the first row being the northernmost.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use rayon::prelude::*;
 
-use super::{MaterialId, ObjectId, Primitive, Scene, Shape, SurfaceClass};
+use super::{MaterialId, ObjectId, Primitive, Scene, Shape, SurfaceClass, Triangle};
 use crate::geometry::{Aabb, DVec3, Ray};
 
 /// Largest height magnitude a terrain raster may hold, m (the deepest
@@ -240,7 +228,7 @@ impl TerrainTile {
 
     /// Closest intersection within `(t_min, t_max)`.
     pub fn intersect(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
-        let (t0, t1) = slab(&self.bounds, ray, t_min, t_max)?;
+        let (t0, t1) = self.bounds.ray_interval(ray, t_min, t_max)?;
         let g = &*self.grid;
         let [dx, dy] = g.spacing_m;
         let [x0, y0] = g.origin_m;
@@ -314,31 +302,6 @@ impl TerrainTile {
     }
 }
 
-/// Ray parameter range inside `b` within `(t_min, t_max)`.
-#[inline]
-pub(crate) fn slab(b: &Aabb, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
-    let mut t0 = t_min;
-    let mut t1 = t_max;
-    for k in 0..3 {
-        let (o, d) = (ray.origin[k], ray.dir[k]);
-        if d == 0.0 {
-            // Parallel to this slab: inside it or never.
-            if o < b.min[k] || o > b.max[k] {
-                return None;
-            }
-            continue;
-        }
-        let inv = 1.0 / d;
-        let (near, far) = {
-            let (a, c) = ((b.min[k] - o) * inv, (b.max[k] - o) * inv);
-            if a <= c { (a, c) } else { (c, a) }
-        };
-        t0 = t0.max(near);
-        t1 = t1.min(far);
-    }
-    (t0 <= t1).then_some((t0, t1))
-}
-
 /// Closest hit on the two triangles of cell `(i, j)`.
 #[inline]
 fn cell_hit(g: &HeightGrid, i: usize, j: usize, ray: &Ray, t_min: f64, t_max: f64) -> Option<f64> {
@@ -352,39 +315,14 @@ fn cell_hit(g: &HeightGrid, i: usize, j: usize, ray: &Ray, t_min: f64, t_max: f6
     let t_lower = if b.z.is_nan() {
         None
     } else {
-        triangle_hit(ray, a, b, c, t_min, t_max)
+        Triangle::from_corners(a, b, c).intersect(ray, t_min, t_max)
     };
     let t_upper = if d.z.is_nan() {
         None
     } else {
-        triangle_hit(ray, a, c, d, t_min, t_max.min(t_lower.unwrap_or(t_max)))
+        Triangle::from_corners(a, c, d).intersect(ray, t_min, t_max.min(t_lower.unwrap_or(t_max)))
     };
     t_upper.or(t_lower)
-}
-
-/// Möller–Trumbore ray/triangle test (Möller & Trumbore 1997).
-#[inline]
-fn triangle_hit(ray: &Ray, v0: DVec3, v1: DVec3, v2: DVec3, t_min: f64, t_max: f64) -> Option<f64> {
-    let e1 = v1 - v0;
-    let e2 = v2 - v0;
-    let p = ray.dir.cross(e2);
-    let det = e1.dot(p);
-    if det.abs() < 1e-15 {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = ray.origin - v0;
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = ray.dir.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    let t = e2.dot(q) * inv;
-    (t > t_min && t < t_max).then_some(t)
 }
 
 /// Adds `grid` to `scene` as tiles of one new object; returns the number of
