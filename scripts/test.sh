@@ -11,8 +11,12 @@ echo "== cargo clippy"
 cargo clippy --all-targets --quiet -- -D warnings
 echo "== cargo doc"
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet
+echo "== module layers: no import cycle, no long file without a reason"
+python3 scripts/check_layers.py
 echo "== cargo test"
 cargo test --quiet
+echo "== cargo test, portable build (-C target-cpu=x86-64: the scalar kernels)"
+CARGO_TARGET_DIR=target/portable RUSTFLAGS="-C target-cpu=x86-64" cargo test --quiet
 echo "== demo + independent LAS check (laspy)"
 scripts/check_las.sh
 echo "== memory stays flat in flight length; 100 M pulses in 1 GiB"

@@ -32,6 +32,7 @@
 //!   exactly the Eq. 2 power summed over the footprint, and it is what the
 //!   LAS intensity records.
 
+use crate::kernels::{Side, for_each_maximum, lowest_before_higher};
 use crate::waveform::{Receiver, Waveform, bin_to_range};
 
 /// Which echoes a receiver keeps when a pulse has more than it records.
@@ -396,50 +397,6 @@ fn bias_table(receiver: &Receiver, fit_half: usize) -> Vec<(f64, f64)> {
     table
 }
 
-/// Calls `f` with each `i` in `1..len − 1`, in order, where `s[i]` is above
-/// `thr` and a maximum (above the sample before it, not below the one
-/// after). With AVX four samples are compared at once (the same ordered
-/// comparisons), so that only maxima cost a branch.
-#[inline]
-fn for_each_maximum(s: &[f64], thr: f64, mut f: impl FnMut(usize)) {
-    let n = s.len();
-    let mut i = 1;
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-    {
-        use std::arch::x86_64::*;
-        // SAFETY: the build enables AVX (checked by the `cfg`); while
-        // `i + 4 < n`, the loads read `s[i − 1..i + 5]`, inside `s`.
-        unsafe {
-            let t = _mm256_set1_pd(thr);
-            while i + 4 < n {
-                let at = s.as_ptr().add(i);
-                let v = _mm256_loadu_pd(at);
-                let before = _mm256_loadu_pd(at.sub(1));
-                let after = _mm256_loadu_pd(at.add(1));
-                let up = _mm256_and_pd(
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(v, t),
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(v, before),
-                );
-                let mut mask =
-                    _mm256_movemask_pd(_mm256_and_pd(up, _mm256_cmp_pd::<_CMP_GE_OQ>(v, after)))
-                        as u32;
-                while mask != 0 {
-                    f(i + mask.trailing_zeros() as usize);
-                    mask &= mask - 1;
-                }
-                i += 4;
-            }
-        }
-    }
-    while i + 1 < n {
-        let v = s[i];
-        if v > thr && v > s[i - 1] && v >= s[i + 1] {
-            f(i);
-        }
-        i += 1;
-    }
-}
-
 /// Topographic prominence of the maximum at `p`, and the lowest sample
 /// in `s[..=p]` and in `s[p..]` when the search on that side reached the
 /// end of `s` (no higher sample lies on that side).
@@ -452,83 +409,6 @@ fn prominence(s: &[f64], p: usize) -> (f64, Option<f64>, Option<f64>) {
         left_end.then_some(left_min),
         right_end.then_some(right_min),
     )
-}
-
-/// Which side of a maximum [`lowest_before_higher`] searches.
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Side {
-    /// Samples before it, searched from the last back.
-    Before,
-    /// Samples after it, searched from the first on.
-    After,
-}
-
-/// The lowest of `h` and the samples of `run` met before the first sample
-/// above `h` (searching from the end of `run` next to the maximum), and
-/// whether no sample was above `h`. The samples are finite and never −0,
-/// so the lowest is the same whatever the order in which they are
-/// compared: with AVX, four at a time.
-#[inline]
-fn lowest_before_higher(run: &[f64], h: f64, side: Side) -> (f64, bool) {
-    let mut low = h;
-    // The samples still to search: `run[..end]` before the maximum,
-    // `run[start..]` after it.
-    #[cfg_attr(
-        not(all(target_arch = "x86_64", target_feature = "avx")),
-        allow(unused_mut)
-    )]
-    let (mut start, mut end) = (0, run.len());
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-    {
-        use std::arch::x86_64::*;
-        // SAFETY: the build enables AVX (checked by the `cfg`); each load
-        // reads four samples inside `run[start..end]`.
-        unsafe {
-            let hv = _mm256_set1_pd(h);
-            let mut lows = hv;
-            while end - start >= 4 {
-                let at = match side {
-                    Side::Before => end - 4,
-                    Side::After => start,
-                };
-                let v = _mm256_loadu_pd(run.as_ptr().add(at));
-                let higher = _mm256_movemask_pd(_mm256_cmp_pd::<_CMP_GT_OQ>(v, hv)) as u32;
-                if higher != 0 {
-                    // The lanes between the maximum and the higher sample
-                    // nearest to it are left to the scalar search below,
-                    // which stops at that sample.
-                    break;
-                }
-                lows = _mm256_min_pd(lows, v);
-                match side {
-                    Side::Before => end -= 4,
-                    Side::After => start += 4,
-                }
-            }
-            let mut l = [0.0f64; 4];
-            _mm256_storeu_pd(l.as_mut_ptr(), lows);
-            for x in l {
-                if x < low {
-                    low = x;
-                }
-            }
-        }
-    }
-    let rest = &run[start..end];
-    let mut scan = |v: f64| {
-        if v > h {
-            return false;
-        }
-        if v < low {
-            low = v;
-        }
-        true
-    };
-    let reached = match side {
-        Side::Before => rest.iter().rev().all(|&v| scan(v)),
-        Side::After => rest.iter().all(|&v| scan(v)),
-    };
-    (low, reached)
 }
 
 /// Index of the smallest sample in `a..=b` (the first of equals). Samples
@@ -750,29 +630,6 @@ mod tests {
             stops += usize::from(want.1.is_none()) + usize::from(want.2.is_none());
         }
         assert!(ends > 5000 && stops > 5000, "{ends} {stops}");
-    }
-
-    #[test]
-    fn maxima_in_lanes_are_the_maxima_one_by_one() {
-        let mut rng = Stream::new(8, 0, 0, Purpose::Test);
-        let mut found = 0;
-        for case in 0..20_000 {
-            // Lengths around the lanes' edges; values from a few levels, so
-            // that neighbours tie (plateaus) and sit on the threshold.
-            let n = case % 23;
-            let s: Vec<f64> = (0..n)
-                .map(|_| [0.0, 0.5, 1.0, 2.0][(rng.uniform() * 4.0) as usize])
-                .collect();
-            let thr = [0.0, 0.5, 1.0][case % 3];
-            let want: Vec<usize> = (1..n.saturating_sub(1))
-                .filter(|&i| s[i] > thr && s[i] > s[i - 1] && s[i] >= s[i + 1])
-                .collect();
-            let mut got = Vec::new();
-            for_each_maximum(&s, thr, |i| got.push(i));
-            assert_eq!(got, want, "case {case}: {s:?}");
-            found += want.len();
-        }
-        assert!(found > 10_000, "{found}");
     }
 
     #[test]

@@ -109,7 +109,8 @@ impl Aabb {
         p.cmpge(self.min - DVec3::splat(tol)).all() && p.cmple(self.max + DVec3::splat(tol)).all()
     }
 
-    /// The interval `[t0, t1]` of `ray.origin + t·ray.dir` inside the box,
+    /// The interval `[t0, t1]` of `ray.origin + t·ray.dir` inside the box
+    /// (not empty),
     /// within `[t_min, t_max]`, if not empty: the slab test (Kay & Kajiya
     /// 1986), the one ray–box test in f64. On each axis the line crosses
     /// the box's planes at `(min − o)/d` and `(max − o)/d`; a line

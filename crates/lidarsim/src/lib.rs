@@ -70,6 +70,7 @@ pub mod detection;
 pub mod files;
 pub mod geometry;
 pub mod io;
+pub mod kernels;
 pub mod message;
 pub mod output;
 pub mod plan;

@@ -9,15 +9,18 @@
 
 use super::{Hit, NO_HIT, PulseTrace, RayCaster, VolumeSpan, finish_spans, make_hit, volume_span};
 use crate::geometry::{Aabb, DVec3, Ray};
+use crate::kernels::{
+    Boxes, BundleSlabs, DirectionBounds, EdgeCone, LANES, Sign, direction_bounds,
+};
 use crate::scene::{
     Coverage, EdgeTest, Primitive, Scene, Shape, Straddle, Triangle, TriangleFan, bundle_cone,
 };
 use rayon::prelude::*;
 
 const MAX_LEAF: usize = 4;
-/// Children of a node of the traversal hierarchy: one per lane of an AVX
-/// register of `f32`.
-const WIDTH: usize = 8;
+/// Children of a node of the traversal hierarchy: one per lane of the box
+/// test kernel.
+const WIDTH: usize = LANES;
 const BINS: usize = 16;
 const STACK: usize = 96;
 /// Levels of the hierarchy whose two halves are built in parallel.
@@ -50,7 +53,7 @@ struct Node {
 struct WideNode {
     /// The box planes, `planes[row][slot]`: rows 0–2 the lower bounds on
     /// x, y, z, rows 3–5 the upper ones.
-    planes: [[f32; WIDTH]; 6],
+    planes: Boxes,
     /// Interior child: its index in the node array. Leaf: the index of its
     /// first primitive (the scene's primitives are in leaf order).
     child: [u32; WIDTH],
@@ -778,8 +781,9 @@ impl RayCaster for Bvh {
         // other than triangles, filled in at the end).
         let mut best = std::mem::take(&mut out.hits);
         out.clear();
-        let (bundle, sum) = Bundle::new(origin - self.origin, dirs);
-        let cone = Cone::new(origin, bundle_cone(dirs, sum));
+        let (bundle, sum) = bundle(origin - self.origin, dirs);
+        let (axis, spread) = bundle_cone(dirs, sum);
+        let cone = EdgeCone::new(origin, axis, spread);
         let mut volumes = std::mem::take(&mut out.volumes);
         best.resize(dirs.len(), (t_max, NO_HIT, DVec3::NAN));
         for b in &mut best {
@@ -834,7 +838,7 @@ impl RayCaster for Bvh {
                 }
             } else {
                 let n = &self.nodes[child as usize];
-                let (mask, t) = bundle.enters(n, slack(far));
+                let (mask, t) = bundle.enters(&n.planes, slack(far));
                 // One child entered (the usual case on the way down): to
                 // it directly, by a branch per slot, so that the processor
                 // can run ahead into it.
@@ -942,60 +946,21 @@ impl RayCaster for Bvh {
     }
 }
 
-/// The bundle of a pulse as [`TriangleFan::coverage`] sees it: the rays'
-/// origin, and the axis and spread of their directions
-/// ([`crate::scene::bundle_spread`]), also in the lanes of AVX registers
-/// where the build has AVX2.
-struct Cone {
-    origin: DVec3,
-    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx2"), allow(dead_code))]
-    axis: DVec3,
-    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx2"), allow(dead_code))]
-    spread: f64,
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
-    lanes: avx::ConeLanes,
-}
-
-impl Cone {
-    fn new(origin: DVec3, (axis, spread): (DVec3, f64)) -> Self {
-        Self {
-            origin,
-            axis,
-            spread,
-            #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
-            lanes: avx::ConeLanes::new(origin, axis, spread),
-        }
-    }
-
-    /// The fan of `tri` from the bundle's origin with its edge planes only
-    /// ([`TriangleFan::edges`]) and what its coverage leaves to test per ray
-    /// (`None`: every ray passes the edge tests), unless the bundle misses
-    /// the triangle. With AVX2 the three edges take three lanes
-    /// ([`avx::ConeLanes::fan`]), else [`Cone::fan_scalar`].
-    #[inline(always)]
-    fn fan(&self, tri: &Triangle) -> Option<(TriangleFan, Option<Straddle>)> {
-        #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
-        {
-            self.lanes.fan(tri, self.origin)
-        }
-        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
-        {
-            self.fan_scalar(tri)
-        }
-    }
-
-    /// [`Cone::fan`] by [`TriangleFan::edges`] and
-    /// [`TriangleFan::coverage`] (the definition).
-    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx2"), allow(dead_code))]
-    #[inline]
-    fn fan_scalar(&self, tri: &Triangle) -> Option<(TriangleFan, Option<Straddle>)> {
-        let fan = TriangleFan::edges(tri, self.origin);
-        match fan.coverage(self.axis, self.spread) {
-            Coverage::None => None,
-            Coverage::All => Some((fan, None)),
-            Coverage::Some(straddle) => Some((fan, Some(straddle))),
-        }
-    }
+/// The fan of `tri` from the cone's origin with its edge planes only
+/// ([`TriangleFan::edges`]) and what its coverage leaves to test per ray
+/// (`None`: every ray passes the edge tests), unless the cone misses the
+/// triangle: [`TriangleFan::coverage`] by the edge-plane kernel.
+#[inline(always)]
+fn fan(cone: &EdgeCone, tri: &Triangle) -> Option<(TriangleFan, Option<Straddle>)> {
+    let corners = tri.vertices();
+    let edges = cone.edges(corners);
+    let straddle = match Coverage::of_edges(edges.certain, edges.positive) {
+        Coverage::None => return None,
+        Coverage::All => None,
+        Coverage::Some(straddle) => Some(straddle),
+    };
+    let fan = TriangleFan::from_edges(edges.normals(), corners[0] - cone.origin);
+    Some((fan, straddle))
 }
 
 /// Tests all rays of a bundle against one triangle (the arithmetic of
@@ -1010,11 +975,11 @@ fn bundle_triangle(
     tri: &Triangle,
     p: u32,
     dirs: &[DVec3],
-    cone: &Cone,
+    cone: &EdgeCone,
     t_min: f64,
     best: &mut [(f64, u32, DVec3)],
 ) -> usize {
-    let Some((mut fan, straddle)) = cone.fan(tri) else {
+    let Some((mut fan, straddle)) = fan(cone, tri) else {
         return 0;
     };
     fan.complete(tri);
@@ -1054,376 +1019,32 @@ fn record_hits(
     first
 }
 
-/// The sub-rays of a pulse as one bundle: a common origin (relative to the
-/// hierarchy's origin) and, per axis, bounds on the direction components.
-struct Bundle {
-    o: [f32; 3],
-    /// Per axis: how the bundle's direction components lie around zero.
-    sign: [Sign; 3],
-    /// Per axis: reciprocals of the lower and upper direction bounds.
-    inv_lo: [f32; 3],
-    inv_hi: [f32; 3],
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-    simd: avx::BundleLanes,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Sign {
-    Positive,
-    Negative,
-    Straddles,
-}
-
-/// Per axis the smallest and largest component of `dirs`, and their sum
-/// (added in order from zero), in one pass.
-#[inline]
-fn direction_bounds(dirs: &[DVec3]) -> ([f64; 3], [f64; 3], DVec3) {
-    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-    {
-        avx::direction_bounds(dirs)
-    }
-    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
-    {
-        direction_bounds_scalar(dirs)
-    }
-}
-
-/// [`direction_bounds`] one component at a time (the definition).
-#[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
-fn direction_bounds_scalar(dirs: &[DVec3]) -> ([f64; 3], [f64; 3], DVec3) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    let mut sum = DVec3::ZERO;
-    // Plain comparisons: the components are finite, so these are the
-    // bounds `f64::min`/`max` give, without their NaN handling.
-    for d in dirs {
-        for a in 0..3 {
-            if d[a] < lo[a] {
-                lo[a] = d[a];
-            }
-            if d[a] > hi[a] {
-                hi[a] = d[a];
-            }
-        }
-        sum += *d;
-    }
-    (lo, hi, sum)
-}
-
-impl Bundle {
-    /// The bundle of `dirs` from `o`, and the sum of `dirs`.
-    fn new(o: DVec3, dirs: &[DVec3]) -> (Self, DVec3) {
-        let (lo, hi, sum) = direction_bounds(dirs);
-        let mut sign = [Sign::Straddles; 3];
-        let mut inv_lo = [0.0f32; 3];
-        let mut inv_hi = [0.0f32; 3];
-        for a in 0..3 {
-            // Widen the bounds a little so that f32 rounding stays on the
-            // conservative side.
-            let (l, h) = (lo[a] - 1e-6, hi[a] + 1e-6);
-            let (l, h) = if l > 0.0 {
-                sign[a] = Sign::Positive;
-                (l, h)
-            } else if h < 0.0 {
-                sign[a] = Sign::Negative;
-                (l, h)
-            } else {
-                (l.min(-1e-12), h.max(1e-12))
-            };
-            inv_lo[a] = (1.0 / l) as f32;
-            inv_hi[a] = (1.0 / h) as f32;
-        }
-        let o = [o.x as f32, o.y as f32, o.z as f32];
-        let bundle = Self {
-            #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-            simd: avx::BundleLanes::new(o, inv_lo, inv_hi),
-            o,
-            sign,
-            inv_lo,
-            inv_hi,
+/// The sub-rays of a pulse as one bundle for the box tests: their origin
+/// relative to the hierarchy's origin and, per axis, the sign and the
+/// reciprocal bounds of their direction components (widened a little so
+/// that f32 rounding stays on the conservative side); and the sum of the
+/// directions.
+fn bundle(o: DVec3, dirs: &[DVec3]) -> (BundleSlabs, DVec3) {
+    let DirectionBounds { lo, hi, sum } = direction_bounds(dirs);
+    let mut sign = [Sign::Straddles; 3];
+    let mut inv_lo = [0.0f32; 3];
+    let mut inv_hi = [0.0f32; 3];
+    for a in 0..3 {
+        let (l, h) = (lo[a] - 1e-6, hi[a] + 1e-6);
+        let (l, h) = if l > 0.0 {
+            sign[a] = Sign::Positive;
+            (l, h)
+        } else if h < 0.0 {
+            sign[a] = Sign::Negative;
+            (l, h)
+        } else {
+            (l.min(-1e-12), h.max(1e-12))
         };
-        (bundle, sum)
+        inv_lo[a] = (1.0 / l) as f32;
+        inv_hi[a] = (1.0 / h) as f32;
     }
-
-    /// The children of `n` that some ray of the bundle can enter before
-    /// `t_max`: bit `slot` of the mask set for each, and per slot a lower
-    /// bound of the distance at which it does (see [`Bundle::enters_box`]).
-    #[inline]
-    fn enters(&self, n: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
-        #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-        {
-            self.simd.enters(n, self.sign, t_max)
-        }
-        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
-        {
-            self.enters_scalar(n, t_max)
-        }
-    }
-
-    /// [`Bundle::enters`] one slot at a time (the definition, and the
-    /// form a build without AVX runs).
-    #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
-    fn enters_scalar(&self, n: &WideNode, t_max: f32) -> (u32, [f32; WIDTH]) {
-        let mut mask = 0;
-        let mut t = [0.0; WIDTH];
-        for (slot, t) in t.iter_mut().enumerate() {
-            let lo = [0, 1, 2].map(|a| n.planes[a][slot]);
-            let hi = [0, 1, 2].map(|a| n.planes[3 + a][slot]);
-            let (enters, t0) = self.enters_box(lo, hi, t_max);
-            mask |= u32::from(enters) << slot;
-            *t = t0;
-        }
-        (mask, t)
-    }
-
-    /// Whether some ray of the bundle can enter the box `[lo, hi]` (relative
-    /// to the hierarchy's origin) before `t_max`, and a lower bound of the
-    /// distance at which it does (the definition; the AVX form computes the
-    /// same products, minima and maxima).
-    ///
-    /// On each axis a ray `o + t·d` (t ≥ 0) with `lo ≤ d ≤ hi` is inside the
-    /// slab `[min, max]` only if `t·hi ≥ min − o` and `t·lo ≤ max − o`; each
-    /// condition bounds `t` from below or above depending on the sign of
-    /// `hi` and `lo`. An empty box (`lo` = +∞, `hi` = −∞) is entered by
-    /// no ray.
-    #[inline]
-    fn enters_box(&self, lo: [f32; 3], hi: [f32; 3], t_max: f32) -> (bool, f32) {
-        let mut t0 = 0.0f32;
-        let mut t1 = t_max;
-        for a in 0..3 {
-            let below = (lo[a] - self.o[a]) * self.inv_hi[a];
-            let above = (hi[a] - self.o[a]) * self.inv_lo[a];
-            match self.sign[a] {
-                Sign::Positive => {
-                    t0 = t0.max(below);
-                    t1 = t1.min(above);
-                }
-                Sign::Negative => {
-                    t0 = t0.max(above);
-                    t1 = t1.min(below);
-                }
-                Sign::Straddles => {
-                    t0 = t0.max(below).max(above);
-                }
-            }
-        }
-        (t0 <= t1, t0)
-    }
-}
-
-/// The bundle box test on the eight children of a node at once, one child
-/// per lane of AVX registers, the AVX direction bounds and the AVX2
-/// triangle edge planes.
-#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
-mod avx {
-    use super::DVec3;
-    #[cfg(target_feature = "avx2")]
-    use super::{Coverage, Straddle, Triangle, TriangleFan};
-    use super::{Sign, WIDTH, WideNode};
-    use std::arch::x86_64::*;
-
-    /// The bundle's constants, per axis, in all eight lanes.
-    #[derive(Clone, Copy)]
-    pub(super) struct BundleLanes {
-        o: [__m256; 3],
-        inv_lo: [__m256; 3],
-        inv_hi: [__m256; 3],
-    }
-
-    /// [`super::direction_bounds`] with the three components of a
-    /// direction in lanes 0–2 of an AVX register: the same comparisons
-    /// (`_mm256_min_pd(d, lo)` is `d < lo ? d : lo`) and the same additions
-    /// in the same order.
-    #[inline]
-    pub(super) fn direction_bounds(dirs: &[DVec3]) -> ([f64; 3], [f64; 3], DVec3) {
-        // SAFETY: the build enables AVX (checked by the `cfg`); each masked
-        // load reads the three `f64` of one `DVec3` and nothing beyond.
-        unsafe {
-            let mask = _mm256_setr_epi64x(-1, -1, -1, 0);
-            let mut lo = _mm256_set1_pd(f64::INFINITY);
-            let mut hi = _mm256_set1_pd(f64::NEG_INFINITY);
-            let mut sum = _mm256_setzero_pd();
-            for d in dirs {
-                let v = _mm256_maskload_pd(d as *const DVec3 as *const f64, mask);
-                lo = _mm256_min_pd(v, lo);
-                hi = _mm256_max_pd(v, hi);
-                sum = _mm256_add_pd(sum, v);
-            }
-            let mut out = [[0.0f64; 4]; 3];
-            _mm256_storeu_pd(out[0].as_mut_ptr(), lo);
-            _mm256_storeu_pd(out[1].as_mut_ptr(), hi);
-            _mm256_storeu_pd(out[2].as_mut_ptr(), sum);
-            let [lo, hi, sum] = out;
-            (
-                [lo[0], lo[1], lo[2]],
-                [hi[0], hi[1], hi[2]],
-                DVec3::new(sum[0], sum[1], sum[2]),
-            )
-        }
-    }
-
-    /// The per-pulse operands of [`ConeLanes::fan`] in all four lanes: the
-    /// rays' origin, the bundle's axis and its squared spread.
-    #[cfg(target_feature = "avx2")]
-    #[derive(Clone, Copy)]
-    pub(super) struct ConeLanes {
-        o: [__m256d; 3],
-        axis: [__m256d; 3],
-        s2: __m256d,
-    }
-
-    #[cfg(target_feature = "avx2")]
-    impl ConeLanes {
-        pub(super) fn new(origin: DVec3, axis: DVec3, spread: f64) -> Self {
-            // SAFETY: the build enables AVX2 (checked by the `cfg`).
-            unsafe {
-                Self {
-                    o: splat3(origin),
-                    axis: splat3(axis),
-                    s2: _mm256_set1_pd(spread * spread),
-                }
-            }
-        }
-
-        /// [`super::Cone::fan_scalar`] with the triangle's three edges in
-        /// three lanes: lane `i` holds corner `i` relative to `origin` and
-        /// the next corner, their cross product (the edge-plane normal
-        /// `a×b`, `b×c`, `c×a`), its product with the axis and its squared
-        /// length, each by the operations of `DVec3::cross` and
-        /// `DVec3::dot` in their order; the comparisons of
-        /// [`TriangleFan::coverage`] give the same coverage, to the bit.
-        #[inline(always)]
-        pub(super) fn fan(
-            &self,
-            tri: &Triangle,
-            origin: DVec3,
-        ) -> Option<(TriangleFan, Option<Straddle>)> {
-            let [v0, v1, v2] = tri.vertices();
-            // SAFETY: the build enables AVX2 (checked by the `cfg`; the
-            // lane permutation needs it); stores go to local arrays of four
-            // `f64`.
-            unsafe {
-                let corners = [
-                    _mm256_setr_pd(v0.x, v1.x, v2.x, 0.0),
-                    _mm256_setr_pd(v0.y, v1.y, v2.y, 0.0),
-                    _mm256_setr_pd(v0.z, v1.z, v2.z, 0.0),
-                ];
-                let p = [0, 1, 2].map(|k| _mm256_sub_pd(corners[k], self.o[k]));
-                // The next corner in each lane: b, c, a.
-                let q = p.map(|r| _mm256_permute4x64_pd::<0b11_00_10_01>(r));
-                let cross = |i: usize, j: usize| {
-                    _mm256_sub_pd(_mm256_mul_pd(p[i], q[j]), _mm256_mul_pd(q[i], p[j]))
-                };
-                let e = [cross(1, 2), cross(2, 0), cross(0, 1)];
-                let w = dot4(&self.axis, &e);
-                let len2 = dot4(&e, &e);
-                let certain =
-                    _mm256_cmp_pd::<_CMP_GT_OQ>(_mm256_mul_pd(w, w), _mm256_mul_pd(self.s2, len2));
-                let positive = _mm256_cmp_pd::<_CMP_GT_OQ>(w, _mm256_setzero_pd());
-                let coverage = Coverage::of_edges(
-                    _mm256_movemask_pd(certain) as u8,
-                    _mm256_movemask_pd(positive) as u8,
-                );
-                let straddle = match coverage {
-                    Coverage::None => return None,
-                    Coverage::All => None,
-                    Coverage::Some(straddle) => Some(straddle),
-                };
-                let mut c = [[0.0f64; 4]; 3];
-                for (k, e) in e.iter().enumerate() {
-                    _mm256_storeu_pd(c[k].as_mut_ptr(), *e);
-                }
-                let normal = |i: usize| DVec3::new(c[0][i], c[1][i], c[2][i]);
-                let fan = TriangleFan::from_edges([normal(0), normal(1), normal(2)], v0 - origin);
-                Some((fan, straddle))
-            }
-        }
-    }
-
-    /// The four lanes of `e` in three registers.
-    #[cfg(target_feature = "avx2")]
-    #[inline(always)]
-    fn splat3(e: DVec3) -> [__m256d; 3] {
-        // SAFETY: the build enables AVX2 (checked by the `cfg`).
-        unsafe {
-            [
-                _mm256_set1_pd(e.x),
-                _mm256_set1_pd(e.y),
-                _mm256_set1_pd(e.z),
-            ]
-        }
-    }
-
-    /// `DVec3::dot` of `d` with `e` lane by lane: the same products added in
-    /// the same order, `(d.x·e.x + d.y·e.y) + d.z·e.z`.
-    #[cfg(target_feature = "avx2")]
-    #[inline(always)]
-    fn dot4(d: &[__m256d; 3], e: &[__m256d; 3]) -> __m256d {
-        // SAFETY: the build enables AVX2 (checked by the `cfg`).
-        unsafe {
-            _mm256_add_pd(
-                _mm256_add_pd(_mm256_mul_pd(d[0], e[0]), _mm256_mul_pd(d[1], e[1])),
-                _mm256_mul_pd(d[2], e[2]),
-            )
-        }
-    }
-
-    impl BundleLanes {
-        pub(super) fn new(o: [f32; 3], inv_lo: [f32; 3], inv_hi: [f32; 3]) -> Self {
-            // SAFETY: the build enables AVX (checked by the `cfg`).
-            let splat = |v: [f32; 3]| v.map(|x| unsafe { _mm256_set1_ps(x) });
-            let (inv_lo, inv_hi) = (splat(inv_lo), splat(inv_hi));
-            Self {
-                o: splat(o),
-                inv_lo,
-                inv_hi,
-            }
-        }
-
-        /// [`super::Bundle::enters`]: per axis the products and the
-        /// minima and maxima of [`super::Bundle::enters_box`], in the same
-        /// order, for the eight slots at once.
-        #[inline(always)]
-        pub(super) fn enters(
-            &self,
-            n: &WideNode,
-            sign: [Sign; 3],
-            t_max: f32,
-        ) -> (u32, [f32; WIDTH]) {
-            // SAFETY: the build enables AVX (checked by the `cfg`); each
-            // load reads one `[f32; 8]` of the node, 32-byte aligned (the
-            // node is 64-byte aligned and its arrays are 32 bytes each).
-            unsafe {
-                let mut t0 = _mm256_setzero_ps();
-                let mut t1 = _mm256_set1_ps(t_max);
-                for (a, sign) in sign.iter().enumerate() {
-                    let lo = _mm256_load_ps(n.planes[a].as_ptr());
-                    let hi = _mm256_load_ps(n.planes[3 + a].as_ptr());
-                    let below = _mm256_mul_ps(_mm256_sub_ps(lo, self.o[a]), self.inv_hi[a]);
-                    let above = _mm256_mul_ps(_mm256_sub_ps(hi, self.o[a]), self.inv_lo[a]);
-                    match sign {
-                        Sign::Positive => {
-                            t0 = _mm256_max_ps(t0, below);
-                            t1 = _mm256_min_ps(t1, above);
-                        }
-                        Sign::Negative => {
-                            t0 = _mm256_max_ps(t0, above);
-                            t1 = _mm256_min_ps(t1, below);
-                        }
-                        Sign::Straddles => {
-                            t0 = _mm256_max_ps(_mm256_max_ps(t0, below), above);
-                        }
-                    }
-                }
-                // The operands are never NaN (the reciprocals are finite
-                // and non-zero), so ordered and quiet is `<=`.
-                let mask = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(t0, t1)) as u32;
-                let mut t = [0.0f32; WIDTH];
-                _mm256_storeu_ps(t.as_mut_ptr(), t0);
-                (mask, t)
-            }
-        }
-    }
+    let o = [o.x as f32, o.y as f32, o.z as f32];
+    (BundleSlabs::new(o, sign, inv_lo, inv_hi), sum)
 }
 
 #[inline]
@@ -1613,12 +1234,12 @@ mod tests {
         }
     }
 
-    /// The box test in lanes is the scalar one: the same entry distance or the
-    /// same miss, for bundles of every sign pattern (positive, negative and
-    /// straddling axes) against boxes all around them, and empty slots
-    /// entered by none.
+    /// The bundle's box test never leaves out a box one of its rays
+    /// enters before `t_max` (tested ray by ray with the f64 slab test),
+    /// for bundles of every sign pattern; and the bundle's sum and cone are
+    /// those of its directions.
     #[test]
-    fn bundle_box_test_lanes_match_scalar() {
+    fn bundle_box_test_keeps_every_box_a_ray_enters() {
         let mut s = crate::rng::Stream::new(9, 0, 0, crate::rng::Purpose::Test);
         let mut u = move || s.uniform() - 0.5;
         let (mut entered, mut missed) = (0, 0);
@@ -1629,25 +1250,8 @@ mod tests {
                 .map(|_| (c + DVec3::new(u(), u(), u()) * spread).normalize())
                 .collect();
             let o = DVec3::new(u(), u(), u()) * 50.0;
-            let (bundle, sum) = Bundle::new(o, &dirs);
-            // Bounds and sum as the definition gives them, to the bit (signed
-            // zeros included, from directions in a coordinate plane).
-            let mut flat_dirs = dirs.clone();
-            for (i, d) in flat_dirs.iter_mut().enumerate() {
-                d[i % 3] = if i % 2 == 0 { 0.0 } else { -0.0 };
-            }
-            for set in [&dirs, &flat_dirs] {
-                let bits = |(lo, hi, sum): ([f64; 3], [f64; 3], DVec3)| {
-                    let sum = [sum.x, sum.y, sum.z];
-                    [lo, hi, sum].map(|v| v.map(f64::to_bits))
-                };
-                assert_eq!(
-                    bits(direction_bounds(set)),
-                    bits(direction_bounds_scalar(set)),
-                    "case {case}"
-                );
-            }
-            assert_eq!(direction_bounds_scalar(&dirs).2, sum);
+            let (slabs, sum) = bundle(o, &dirs);
+            assert_eq!(sum, dirs.iter().fold(DVec3::ZERO, |s, d| s + *d));
             assert_eq!(bundle_cone(&dirs, sum), crate::scene::bundle_spread(&dirs));
             // Boxes near the bundle's axis, behind the origin or ahead of it,
             // in the slots of a node; the last slot of every third node is
@@ -1659,37 +1263,49 @@ mod tests {
                     * [0.0, 1.0, 20.0][(case + slot) % 3];
                 let (a, b) = (near - size, near + size);
                 for k in 0..3 {
-                    node.planes[k][slot] = a[k] as f32;
-                    node.planes[3 + k][slot] = b[k] as f32;
+                    node.planes[k][slot] = down(a[k]);
+                    node.planes[3 + k][slot] = up(b[k]);
                 }
             }
             let t_max = [1e3f32, 60.0][case % 2];
-            let (mask, t) = bundle.enters(&node, t_max);
-            for (slot, &t) in t.iter().enumerate() {
-                let lo = [0, 1, 2].map(|k| node.planes[k][slot]);
-                let hi = [0, 1, 2].map(|k| node.planes[3 + k][slot]);
-                let (enters, t0) = bundle.enters_box(lo, hi, t_max);
-                assert_eq!(mask & (1 << slot) != 0, enters, "case {case} slot {slot}");
-                if enters {
-                    assert_eq!(t, t0, "case {case} slot {slot}");
+            let (mask, t) = slabs.enters(&node.planes, t_max);
+            for (slot, &t_slot) in t.iter().enumerate() {
+                let b = Aabb {
+                    min: DVec3::from([0, 1, 2].map(|k| node.planes[k][slot] as f64)),
+                    max: DVec3::from([0, 1, 2].map(|k| node.planes[3 + k][slot] as f64)),
+                };
+                let entering = (!b.is_empty())
+                    .then_some(&dirs)
+                    .into_iter()
+                    .flatten()
+                    .filter_map(|d| b.ray_interval(&Ray { origin: o, dir: *d }, 0.0, t_max as f64))
+                    .map(|(t0, _)| t0)
+                    .reduce(f64::min);
+                if let Some(t0) = entering {
+                    assert!(mask & (1 << slot) != 0, "case {case} slot {slot}");
+                    assert!(t_slot as f64 <= t0 * (1.0 + 1e-5) + 1e-5, "case {case}");
                     entered += 1;
                 } else {
                     missed += 1;
                 }
-                if lo[0] > hi[0] {
-                    assert!(!enters, "case {case}: an empty slot is entered");
+                if b.is_empty() {
+                    assert_eq!(
+                        mask & (1 << slot),
+                        0,
+                        "case {case}: an empty slot is entered"
+                    );
                 }
             }
-            assert_eq!((mask, t), bundle.enters_scalar(&node, t_max), "case {case}");
         }
         assert!(entered > 4000 && missed > 4000, "{entered} {missed}");
     }
 
-    /// The triangle test's edge planes and coverage, three edges in three
-    /// lanes, are the definition's to the bit, for bundles that miss,
-    /// straddle and cover triangles (also degenerate and far ones).
+    /// The edge planes and coverage the kernel gives are the scene's
+    /// definition ([`TriangleFan::edges`], [`TriangleFan::coverage`]) to
+    /// the bit, for bundles that miss, straddle and cover triangles (also
+    /// degenerate and far ones).
     #[test]
-    fn triangle_coverage_lanes_match_scalar() {
+    fn triangle_coverage_is_the_scenes_definition() {
         let mut s = crate::rng::Stream::new(12, 0, 0, crate::rng::Purpose::Test);
         let mut u = move || s.uniform() - 0.5;
         let mut seen = [0usize; 3];
@@ -1697,7 +1313,7 @@ mod tests {
             let origin = DVec3::new(u(), u(), u()) * 1000.0 + DVec3::Z * 500.0;
             let axis = DVec3::new(u() * 0.8, u() * 0.8, -1.0).normalize();
             let spread = [0.0, 1e-4, 0.02, 0.3][case % 4];
-            let cone = Cone::new(origin, (axis, spread));
+            let cone = EdgeCone::new(origin, axis, spread);
             // Corners around the point the axis reaches 500 m away, from
             // centimetres to tens of metres apart.
             let at = origin + axis * 500.0;
@@ -1721,8 +1337,13 @@ mod tests {
                     )
                 })
             };
-            let want = cone.fan_scalar(&tri);
-            assert_eq!(bits(&cone.fan(&tri)), bits(&want), "case {case}");
+            let definition = TriangleFan::edges(&tri, origin);
+            let want = match definition.coverage(axis, spread) {
+                Coverage::None => None,
+                Coverage::All => Some((definition, None)),
+                Coverage::Some(straddle) => Some((definition, Some(straddle))),
+            };
+            assert_eq!(bits(&fan(&cone, &tri)), bits(&want), "case {case}");
             seen[match want {
                 None => 0,
                 Some((_, None)) => 1,
