@@ -8,9 +8,14 @@
 //! surface-area heuristic (the default), and [`BruteForce`], which tests every
 //! primitive and serves as the reference in tests.
 
+mod brute;
 mod bvh;
+mod trace;
 
+pub use brute::BruteForce;
 pub use bvh::{Bvh, BvhStats};
+pub(crate) use trace::Nearest;
+pub use trace::PulseTrace;
 
 use crate::geometry::{DVec3, Ray};
 use crate::scene::{Primitive, Scene};
@@ -37,95 +42,6 @@ pub struct VolumeSpan {
     pub t_in: f64,
     /// Where it leaves them (or meets the closest surface), m.
     pub t_out: f64,
-}
-
-/// Closest hits and volume spans of all sub-rays of one pulse.
-#[derive(Clone, Debug, Default)]
-pub struct PulseTrace {
-    /// Per sub-ray: distance, primitive ([`NO_HIT`] for none) and unit
-    /// normal facing the ray of its closest surface (meaningful only for a
-    /// hit). Bundle traversals work in it directly, with a NaN normal until
-    /// the end for surfaces other than triangles.
-    pub(crate) hits: Vec<(f64, u32, DVec3)>,
-    spans: Vec<VolumeSpan>,
-    ranges: Vec<(u32, u32)>,
-    /// Working storage of bundle traversals: volumes met by the bundle.
-    pub(crate) volumes: Vec<u32>,
-    /// Working storage of bundle traversals: the node stack.
-    pub(crate) stack: Vec<bvh::Pending>,
-}
-
-/// The primitive number of a sub-ray without a hit in [`PulseTrace`].
-pub(crate) const NO_HIT: u32 = u32::MAX;
-
-impl PulseTrace {
-    /// Empties the trace for `n` sub-rays.
-    pub fn clear(&mut self) {
-        self.hits.clear();
-        self.spans.clear();
-        self.ranges.clear();
-    }
-
-    /// Records the result of the next sub-ray: its hit and the spans that
-    /// [`RayCaster::trace`] left in `spans`.
-    pub fn push(&mut self, hit: Option<Hit>, spans: &[VolumeSpan]) {
-        self.push_spans(spans);
-        self.hits.push(match hit {
-            Some(h) => (h.t, h.prim, h.normal),
-            None => (f64::INFINITY, NO_HIT, DVec3::NAN),
-        });
-    }
-
-    /// Records the spans of the next sub-ray, whose hit the caller sets in
-    /// `hits`.
-    pub(crate) fn push_spans(&mut self, spans: &[VolumeSpan]) {
-        let start = self.spans.len() as u32;
-        self.spans.extend_from_slice(spans);
-        self.ranges.push((start, self.spans.len() as u32));
-    }
-
-    /// Closest surface hit of sub-ray `i`.
-    #[inline]
-    pub fn hit(&self, i: usize) -> Option<Hit> {
-        let (t, prim, normal) = self.hits[i];
-        (prim != NO_HIT).then_some(Hit { t, prim, normal })
-    }
-
-    /// Distance to sub-ray `i`'s closest hit, infinite for a miss.
-    #[inline]
-    pub fn range(&self, i: usize) -> f64 {
-        self.hits[i].0
-    }
-
-    /// The nearest and the farthest closest hit of the sub-rays (infinite
-    /// for a miss).
-    pub fn range_span(&self) -> (f64, f64) {
-        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
-        for h in &self.hits {
-            // Comparisons rather than `f64::min`/`max`: ranges are never NaN.
-            if h.0 < lo {
-                lo = h.0;
-            }
-            if h.0 > hi {
-                hi = h.0;
-            }
-        }
-        (lo, hi)
-    }
-
-    /// True when no sub-ray has a volume span (no crown on its way).
-    #[inline]
-    pub fn has_no_spans(&self) -> bool {
-        self.spans.is_empty()
-    }
-
-    /// Volume spans of sub-ray `i`, sorted by entry distance.
-    pub fn spans_of(&self, i: usize) -> &[VolumeSpan] {
-        match self.ranges.get(i) {
-            Some(&(a, b)) => &self.spans[a as usize..b as usize],
-            None => &[],
-        }
-    }
 }
 
 /// Answers closest-hit queries over a scene.
@@ -240,54 +156,4 @@ pub fn ground_below(caster: &dyn RayCaster, p: DVec3) -> f64 {
         .closest_hit_where(&ray, 0.0, f64::INFINITY, &ground)
         .or_else(|| caster.closest_hit(&ray, 0.0, f64::INFINITY))
         .map_or(0.0, |h| p.z - h.t)
-}
-
-/// Tests every primitive: slow, obviously correct, used as the reference.
-#[derive(Debug)]
-pub struct BruteForce {
-    scene: Scene,
-}
-
-impl BruteForce {
-    /// Wraps a scene.
-    pub fn new(scene: Scene) -> Self {
-        Self { scene }
-    }
-}
-
-impl RayCaster for BruteForce {
-    fn scene(&self) -> &Scene {
-        &self.scene
-    }
-
-    fn closest_hit_where(
-        &self,
-        ray: &Ray,
-        t_min: f64,
-        t_max: f64,
-        accept: &dyn Fn(&Primitive) -> bool,
-    ) -> Option<Hit> {
-        let mut best: Option<(f64, u32)> = None;
-        for (i, p) in self.scene.primitives.iter().enumerate() {
-            let limit = best.map_or(t_max, |b| b.0);
-            if let Some(t) = p.intersect(ray, t_min, limit)
-                && accept(p)
-            {
-                best = Some((t, i as u32));
-            }
-        }
-        best.map(|(t, i)| make_hit(&self.scene, i, ray, t))
-    }
-
-    fn trace(&self, ray: &Ray, t_min: f64, t_max: f64, spans: &mut Vec<VolumeSpan>) -> Option<Hit> {
-        let hit = self.closest_hit(ray, t_min, t_max);
-        spans.clear();
-        for (i, p) in self.scene.primitives.iter().enumerate() {
-            if let Some(s) = volume_span(p, i as u32, ray, t_min, t_max) {
-                spans.push(s);
-            }
-        }
-        finish_spans(spans, hit.map_or(t_max, |h| h.t));
-        hit
-    }
 }

@@ -1,0 +1,426 @@
+//! Building the hierarchy: a binary tree by the binned surface-area
+//! heuristic (its top levels in parallel), collapsed into the eight-wide
+//! nodes the traversals use; the scene's primitives put in leaf order.
+
+use rayon::prelude::*;
+
+use super::{BINS, Bvh, MAX_LEAF, Node, PARALLEL_DEPTH, PARALLEL_MIN, WIDTH, WideNode};
+use crate::geometry::{Aabb, DVec3};
+use crate::scene::Scene;
+
+struct BuildPrim {
+    bounds: Aabb,
+}
+
+impl BuildPrim {
+    #[inline]
+    fn centroid(&self) -> DVec3 {
+        self.bounds.center()
+    }
+}
+
+impl Bvh {
+    /// Builds the hierarchy over `scene`, which it then owns with its
+    /// primitives reordered so that each leaf's are adjacent: the primitive
+    /// numbers of hits index [`RayCaster::scene`], not the scene given.
+    pub fn build(scene: Scene) -> Self {
+        // The primitives' boxes on all threads; the scene's box from them
+        // ([`Scene::bounds`], the same unions in the same order).
+        let prims: Vec<BuildPrim> = scene
+            .primitives
+            .par_iter()
+            .map(|p| BuildPrim { bounds: p.bounds() })
+            .collect();
+        let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
+        let origin = if bounds.is_empty() {
+            DVec3::ZERO
+        } else {
+            bounds.center()
+        };
+        let size = if bounds.is_empty() {
+            1.0
+        } else {
+            bounds.extent().max_element().max(1.0)
+        };
+        // f32 rounding of box corners and of ray origins far from the scene
+        // origin: 1 mm plus a relative margin covers ranges up to ~100 km.
+        let pad = 1e-3 + 1e-6 * size;
+        let mut order: Vec<u32> = (0..prims.len() as u32).collect();
+        let mut bvh = Self {
+            scene: Scene::default(),
+            nodes: Vec::new(),
+            stack_len: 0,
+            origin,
+            pad,
+        };
+        // The binary tree: the root at 0, its descendants after it, each
+        // subtree's within the room its primitive count bounds (a binary
+        // tree over n primitives has at most 2n − 1 nodes), so that the
+        // subtrees built in parallel write their own parts of one array.
+        let mut nodes = zeroed_nodes((2 * prims.len()).saturating_sub(1));
+        let mut used = 0;
+        if let Some((root, desc)) = nodes.split_first_mut() {
+            let (r, n) = bvh.subtree(&prims, &mut order, 0, 0, desc, 1);
+            *root = r;
+            used = 1 + n;
+        }
+        drop(prims);
+        let (wide, depth) = collapse(&nodes, used);
+        drop(nodes);
+        let mut scene = scene;
+        in_leaf_order(&mut scene.primitives, order);
+        bvh.scene = scene;
+        bvh.nodes = wide;
+        bvh.stack_len = stack_len(depth);
+        bvh
+    }
+
+    /// The box node over `order[at..at + count]`, a leaf whose first
+    /// primitive is at `first + at` in the whole order.
+    fn leaf_node(
+        &self,
+        prims: &[BuildPrim],
+        order: &[u32],
+        at: usize,
+        count: usize,
+        first: usize,
+    ) -> Node {
+        let b = order[at..at + count]
+            .iter()
+            .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds));
+        self.node_over(b, at, count, first)
+    }
+
+    /// The leaf node with box `b` over `count` primitives from `first + at`
+    /// in the whole order.
+    fn node_over(&self, b: Aabb, at: usize, count: usize, first: usize) -> Node {
+        let lo = b.min - self.origin - DVec3::splat(self.pad);
+        let hi = b.max - self.origin + DVec3::splat(self.pad);
+        Node {
+            min: [down(lo.x), down(lo.y), down(lo.z)],
+            left_or_first: (first + at) as u32,
+            max: [up(hi.x), up(hi.y), up(hi.z)],
+            count: count as u32,
+        }
+    }
+
+    /// Builds the subtree over `order` (whose first element is at `first`
+    /// in the whole order). Returns its root and how many nodes it used in
+    /// `desc`, which receives its other nodes (room for `2·len − 2`; its
+    /// first element is node `base` of the whole array, child indices
+    /// count from the start of that array). The two halves of the top
+    /// levels are built in parallel into their own parts of `desc`; the
+    /// tree is the same as a sequential build's.
+    fn subtree(
+        &self,
+        prims: &[BuildPrim],
+        order: &mut [u32],
+        first: usize,
+        depth: usize,
+        desc: &mut [Node],
+        base: usize,
+    ) -> (Node, usize) {
+        let count = order.len();
+        let mut root = self.leaf_node(prims, order, 0, count, first);
+        if depth >= PARALLEL_DEPTH || count < PARALLEL_MIN {
+            let used = self.sequential(prims, order, first, &mut root, desc, base);
+            return (root, used);
+        }
+        let Some((mid, _)) = split(prims, order) else {
+            return (root, 0);
+        };
+        let (lo, hi) = order.split_at_mut(mid);
+        // Layout: the two children, then room for the left's descendants,
+        // then for the right's.
+        let (pair, rest) = desc.split_at_mut(2);
+        let (ldesc, rdesc) = rest.split_at_mut(2 * mid - 2);
+        let (lbase, rbase) = (base + 2, base + 2 + ldesc.len());
+        let ((lroot, lused), (rroot, rused)) = rayon::join(
+            || self.subtree(prims, lo, first, depth + 1, ldesc, lbase),
+            || self.subtree(prims, hi, first + mid, depth + 1, rdesc, rbase),
+        );
+        pair[0] = lroot;
+        pair[1] = rroot;
+        root.left_or_first = base as u32;
+        root.count = 0;
+        (root, 2 + lused + rused)
+    }
+
+    /// Sequential binned-SAH build below `root` (a leaf over all of
+    /// `order`, which may become interior); descendants go to the front of
+    /// `desc` (node `base` of the whole array). Returns how many.
+    fn sequential(
+        &self,
+        prims: &[BuildPrim],
+        order: &mut [u32],
+        first: usize,
+        root: &mut Node,
+        desc: &mut [Node],
+        base: usize,
+    ) -> usize {
+        let mut used = 0;
+        // Work items: (node, None) for the root, (index in desc) otherwise.
+        let mut work: Vec<Option<usize>> = vec![None];
+        while let Some(item) = work.pop() {
+            let node = match item {
+                None => *root,
+                Some(i) => desc[i],
+            };
+            let at = node.left_or_first as usize - first;
+            let count = node.count as usize;
+            if let Some((mid, halves)) = split(prims, &mut order[at..at + count]) {
+                let left = used;
+                let (l, r) = halves;
+                desc[left] = self.node_over(l, at, mid, first);
+                desc[left + 1] = self.node_over(r, at + mid, count - mid, first);
+                used += 2;
+                let parent = match item {
+                    None => &mut *root,
+                    Some(i) => &mut desc[i],
+                };
+                parent.left_or_first = (base + left) as u32;
+                parent.count = 0;
+                work.push(Some(left));
+                work.push(Some(left + 1));
+            }
+        }
+        used
+    }
+}
+
+/// Reorders `prims` in place so that the `i`-th is the one `order[i]` named
+/// (following each cycle of the permutation, without a second copy): the
+/// primitives of a leaf, and of neighbouring leaves, then lie next to each
+/// other in memory, and a leaf names its primitives directly.
+pub(super) fn in_leaf_order<T>(prims: &mut [T], mut order: Vec<u32>) {
+    const DONE: u32 = u32::MAX;
+    for start in 0..order.len() {
+        let mut at = start;
+        while order[at] != DONE {
+            let from = order[at] as usize;
+            order[at] = DONE;
+            if from == start {
+                break;
+            }
+            prims.swap(at, from);
+            at = from;
+        }
+    }
+}
+
+/// `n` binary nodes, all zero (empty leaves over nothing). Zeroed memory
+/// from the allocator (fresh pages for an array this large) becomes
+/// resident only where the build writes nodes: the room that subtrees
+/// leave unused costs address space, not memory. `vec![node; n]` would
+/// write every element.
+fn zeroed_nodes(n: usize) -> Vec<Node> {
+    if n == 0 {
+        return Vec::new();
+    }
+    let layout = std::alloc::Layout::array::<Node>(n).expect("node array fits the address space");
+    // SAFETY: the layout is non-empty (`n > 0`, `Node` is 32 bytes); all
+    // zero bits are a valid `Node` (its fields are `f32` and `u32`); the
+    // pointer comes from the global allocator with the layout of a
+    // `Vec<Node>` of capacity `n`, all `n` elements initialised.
+    unsafe {
+        let p = std::alloc::alloc_zeroed(layout).cast::<Node>();
+        if p.is_null() {
+            std::alloc::handle_alloc_error(layout);
+        }
+        Vec::from_raw_parts(p, n, n)
+    }
+}
+
+/// Traversal stack entries for a hierarchy `depth` nodes deep: each node
+/// visited leaves at most `WIDTH − 1` of its children on the stack; the
+/// last is visited next (pushed, then popped).
+pub(super) fn stack_len(depth: usize) -> usize {
+    (WIDTH - 1) * depth + WIDTH
+}
+
+/// The eight-wide hierarchy of a binary one (root first, children of an
+/// interior node adjacent) whose nodes reachable from the root number
+/// `used`: each wide node takes a binary node's two children and, while it
+/// has fewer than [`WIDTH`], replaces its interior child with the largest
+/// box by that child's two children. Returns the nodes and the number of
+/// them on the longest path from the root.
+fn collapse(bin: &[Node], used: usize) -> (Vec<WideNode>, usize) {
+    let mut wide = Vec::new();
+    if used == 0 {
+        return (wide, 0);
+    }
+    let area = |n: &Node| {
+        let e = [0, 1, 2].map(|a| (n.max[a] - n.min[a]) as f64);
+        e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+    };
+    wide.reserve_exact(used / (WIDTH - 1) + 1);
+    wide.push(WideNode::EMPTY);
+    let mut depth = 0;
+    // (binary node, its wide node, depth)
+    let mut work = vec![(0usize, 0usize, 1usize)];
+    while let Some((b, w, d)) = work.pop() {
+        depth = depth.max(d);
+        let mut kids = [0usize; WIDTH];
+        let mut len = if bin[b].count > 0 {
+            // A root that is a leaf: the only child.
+            kids[0] = b;
+            1
+        } else {
+            let l = bin[b].left_or_first as usize;
+            kids[..2].copy_from_slice(&[l, l + 1]);
+            2
+        };
+        while len < WIDTH {
+            let mut open: Option<(usize, f64)> = None;
+            for (i, &k) in kids[..len].iter().enumerate() {
+                if bin[k].count == 0 && open.is_none_or(|(_, a)| area(&bin[k]) > a) {
+                    open = Some((i, area(&bin[k])));
+                }
+            }
+            let Some((i, _)) = open else { break };
+            let l = bin[kids[i]].left_or_first as usize;
+            kids.copy_within(i + 1..len, i + 2);
+            kids[i] = l;
+            kids[i + 1] = l + 1;
+            len += 1;
+        }
+        let mut node = WideNode::EMPTY;
+        for (slot, &k) in kids[..len].iter().enumerate() {
+            let n = &bin[k];
+            for a in 0..3 {
+                node.planes[a][slot] = n.min[a];
+                node.planes[3 + a][slot] = n.max[a];
+            }
+            if n.count > 0 {
+                node.child[slot] = n.left_or_first;
+                node.count[slot] = n.count;
+            } else {
+                node.child[slot] = wide.len() as u32;
+                work.push((k, wide.len(), d + 1));
+                wide.push(WideNode::EMPTY);
+            }
+        }
+        wide[w] = node;
+    }
+    (wide, depth)
+}
+
+/// Largest f32 not above `x`.
+pub(super) fn down(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x { f.next_down() } else { f }
+}
+
+/// Smallest f32 not below `x`.
+pub(super) fn up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x { f.next_up() } else { f }
+}
+
+/// Partitions `items` by the best binned-SAH plane; returns the size of the
+/// left part and the bounds of the two parts (from the bins: the union of
+/// their bins' boxes is the union of their primitives'), or `None` when the
+/// node should stay a leaf.
+fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<(usize, (Aabb, Aabb))> {
+    let n = items.len();
+    if n <= MAX_LEAF {
+        return None;
+    }
+    // One pass for the bounds of the centroids and of the node, one for
+    // the bins of all three axes.
+    let (cb, nb) = items.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(c, b), &i| {
+        let p = &prims[i as usize];
+        (c.union_point(p.centroid()), b.union(p.bounds))
+    });
+    let node_area = nb.surface_area();
+    let ext = cb.extent();
+    let scale = [0, 1, 2].map(|a| {
+        if ext[a] > 0.0 {
+            BINS as f64 / ext[a]
+        } else {
+            0.0
+        }
+    });
+    let mut boxes = [[Aabb::EMPTY; BINS]; 3];
+    let mut counts = [[0usize; BINS]; 3];
+    for &i in items.iter() {
+        let p = &prims[i as usize];
+        let c = p.centroid();
+        for axis in 0..3 {
+            let b = (((c[axis] - cb.min[axis]) * scale[axis]) as usize).min(BINS - 1);
+            boxes[axis][b] = boxes[axis][b].union(p.bounds);
+            counts[axis][b] += 1;
+        }
+    }
+    let mut best: Option<(f64, usize, usize)> = None; // (cost, axis, bin)
+    for axis in 0..3 {
+        if ext[axis] <= 0.0 {
+            continue;
+        }
+        let (boxes, counts) = (&boxes[axis], &counts[axis]);
+        // Sweep from the right to get the right-hand areas and counts.
+        let mut right_area = [0.0; BINS];
+        let mut right_count = [0usize; BINS];
+        let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
+        for b in (1..BINS).rev() {
+            acc = acc.union(boxes[b]);
+            cnt += counts[b];
+            right_area[b] = acc.surface_area();
+            right_count[b] = cnt;
+        }
+        let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
+        for b in 0..BINS - 1 {
+            acc = acc.union(boxes[b]);
+            cnt += counts[b];
+            if cnt == 0 || right_count[b + 1] == 0 {
+                continue;
+            }
+            let cost =
+                acc.surface_area() * cnt as f64 + right_area[b + 1] * right_count[b + 1] as f64;
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, b));
+            }
+        }
+    }
+    match best {
+        Some((cost, axis, bin)) => {
+            // Traversal cost 1, intersection cost 1 per primitive.
+            let leaf_cost = n as f64 * node_area;
+            if cost >= leaf_cost && n <= 2 * MAX_LEAF {
+                return None;
+            }
+            let scale = scale[axis];
+            let goes_left = |i: &u32| {
+                let c = prims[*i as usize].centroid()[axis];
+                ((((c - cb.min[axis]) * scale) as usize).min(BINS - 1)) <= bin
+            };
+            let mid = partition(items, goes_left);
+            let bins = &boxes[axis];
+            let halves = (
+                bins[..=bin].iter().fold(Aabb::EMPTY, |a, b| a.union(*b)),
+                bins[bin + 1..].iter().fold(Aabb::EMPTY, |a, b| a.union(*b)),
+            );
+            (mid > 0 && mid < n).then_some((mid, halves))
+        }
+        // All centroids coincide: split the list in halves so that leaves
+        // stay small.
+        None => {
+            let bounds = |part: &[u32]| {
+                part.iter()
+                    .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds))
+            };
+            Some((n / 2, (bounds(&items[..n / 2]), bounds(&items[n / 2..]))))
+        }
+    }
+}
+
+fn partition(items: &mut [u32], pred: impl Fn(&u32) -> bool) -> usize {
+    let mut i = 0;
+    for j in 0..items.len() {
+        if pred(&items[j]) {
+            items.swap(i, j);
+            i += 1;
+        }
+    }
+    i
+}
