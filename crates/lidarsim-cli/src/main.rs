@@ -783,7 +783,7 @@ fn waveform(
         ));
     }
     let sim = lidarsim::sim::Simulator::new(&survey, &world);
-    let (plot, scratch) = lidarsim::render::WaveformPlot::of_pulse(&sim, line_ref, k);
+    let (plot, scratch) = lidarsim::run::replay::pulse(&sim, line_ref, k);
     plot.render()
         .save_png(output)
         .map_err(|e| (1, format!("{}: {e}", output.display())))?;

@@ -6,6 +6,9 @@
 use std::io;
 use std::path::Path;
 
+use crate::detection::Echo;
+use crate::waveform::{Waveform, bin_to_range};
+
 /// The attributes a picture can show of a point.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderPoint {
@@ -971,39 +974,31 @@ const PLOT_LEFT: usize = 60;
 const PLOT_TOP: usize = 20;
 
 impl WaveformPlot {
-    /// Simulates pulse `k` of `line` again and collects its waveform, the
-    /// detection threshold and the echoes.
-    pub fn of_pulse(
-        sim: &crate::sim::Simulator<'_>,
-        line: &crate::sensor::platform::FlightLine,
-        k: u64,
-    ) -> (Self, crate::sim::Scratch) {
-        let mut scratch = crate::sim::Scratch::default();
-        sim.simulate_pulse(line, k, &mut scratch, &mut Vec::new());
-        let wf = scratch.waveform();
-        let bin_s = sim.receiver().config().bin_s;
-        let threshold = sim.detector().threshold();
+    /// The plot of one recorded pulse: its `waveform` (bins of `bin_s`
+    /// seconds, with the sub-ray returns placed on the time axis and the
+    /// expected background), the `echoes` detected in it and the
+    /// detector's `threshold` above the background.
+    pub fn new(waveform: &Waveform, echoes: &[Echo], bin_s: f64, threshold: f64) -> Self {
+        let wf = waveform;
         let background_at = |bin: f64| {
             let i =
                 (bin.round() as i64 - wf.first_bin).clamp(0, wf.background.len().max(1) as i64 - 1);
             wf.background_at(i as usize)
         };
-        let plot = Self {
+        Self {
             ranges_m: (0..wf.samples.len())
-                .map(|i| crate::waveform::bin_to_range((wf.first_bin + i as i64) as f64, bin_s))
+                .map(|i| bin_to_range((wf.first_bin + i as i64) as f64, bin_s))
                 .collect(),
             signal: wf.samples.clone(),
             returns: wf.impulses.clone(),
             threshold: (0..wf.samples.len())
                 .map(|i| wf.background_at(i) + threshold)
                 .collect(),
-            echoes: scratch
-                .echoes()
+            echoes: echoes
                 .iter()
                 .map(|e| (e.range_m, e.peak_amplitude + background_at(e.bin)))
                 .collect(),
-        };
-        (plot, scratch)
+        }
     }
 
     /// Largest value shown on the vertical axis.
