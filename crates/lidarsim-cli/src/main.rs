@@ -5,7 +5,7 @@
 //! and reports errors with a non-zero exit status (2 for a bad survey, 1
 //! for a failed run). Each command has its module: [`simulate`] (`demo`
 //! and `run`, with [`summary`] printing a finished run), [`check`],
-//! [`waveform`], [`render`] and [`bench`]; [`console`] holds how the
+//! [`waveform`], [`render`] and [`mod@bench`]; [`console`] holds how the
 //! program prints, [`cpu`] the processor check.
 
 use std::process::ExitCode;
