@@ -4,9 +4,11 @@
 //! [`run_to_dir`] prepares the directory ([`outdir`]), simulates the survey
 //! into its point files and writes `summary.json` ([`crate::summary`]); a run
 //! stopped early leaves its point files finished but under their
-//! `.partial` names with a record a resumed run checks ([`resume`]).
+//! `.partial` names with a record a resumed run checks ([`resume`]). The
+//! report's sample waveforms are pulses simulated again ([`replay`]).
 
 pub mod outdir;
+pub mod replay;
 pub mod resume;
 
 pub use crate::summary::Summary;
@@ -421,7 +423,7 @@ pub fn run_world_to_dir(
     ];
     for (l, k, what) in picks.into_iter().flatten() {
         if let Some(line) = world.lines.get(l as usize) {
-            let (plot, _) = crate::render::WaveformPlot::of_pulse(&sim, line, k);
+            let (plot, _) = replay::pulse(&sim, line, k);
             waveforms.push((format!("Line {} pulse {k}: {what}", l + 1), plot));
         }
     }

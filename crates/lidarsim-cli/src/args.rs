@@ -1,0 +1,184 @@
+//! The command line as clap parses it: the commands and their options.
+
+use std::path::PathBuf;
+
+use clap::{Args, Parser, Subcommand};
+
+/// The whole command line: one of the commands.
+#[derive(Parser)]
+#[command(
+    name = "lidarsim",
+    version,
+    about = "Airborne LiDAR simulator: full-waveform pulses over a 3D scene to a LAS point cloud"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The commands.
+#[derive(Subcommand)]
+pub enum Command {
+    /// Fly the built-in survey over the built-in town block (no input files).
+    Demo(DemoArgs),
+    /// Simulate a survey file (Ctrl-C stops at the next block of pulses
+    /// with valid files; `--resume DIR` continues such a run).
+    Run(RunArgs),
+    /// Validate a survey file and print what it will give, without simulating.
+    Check(CheckArgs),
+    /// Plot the full waveform of one pulse of a run (simulated again from its survey.toml).
+    /// Name the pulse by --line and --pulse, by a point's --gps-time, or by a
+    /// place with --near.
+    Waveform(WaveformArgs),
+    /// Render a LAS or LAZ file (ours or anyone's) as a top view or a cross-section PNG.
+    Render(RenderArgs),
+    /// Measure speed on the benchmark scenes (flat, 1 M-triangle terrain).
+    Bench(BenchArgs),
+}
+
+/// The options of `lidarsim demo`.
+#[derive(Args)]
+pub struct DemoArgs {
+    /// Output directory.
+    #[arg(short, long, default_value = "demo-out")]
+    pub output: PathBuf,
+    /// Threads, the one writing the output among them (default: all
+    /// cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Seed of all random streams (overrides the demo's; 0 to
+    /// 9223372036854775807, the integers a TOML file can hold).
+    #[arg(long, value_parser = seed_parser())]
+    pub seed: Option<u64>,
+    /// Write into a non-empty directory no run wrote, replacing only
+    /// the files a run writes there.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Run even if the expected output exceeds the free disk space or
+    /// the expected memory is not available.
+    #[arg(long)]
+    pub no_space_check: bool,
+    /// Also write the demo's survey as a TOML file, to start your own.
+    #[arg(long, value_name = "FILE")]
+    pub export_survey: Option<PathBuf>,
+}
+
+/// The options of `lidarsim run`.
+#[derive(Args)]
+pub struct RunArgs {
+    /// The survey (TOML).
+    #[arg(required_unless_present = "resume")]
+    pub survey: Option<PathBuf>,
+    /// Output directory.
+    #[arg(short, long, default_value = "out", conflicts_with = "resume")]
+    pub output: PathBuf,
+    /// Threads, the one writing the output among them (default: all
+    /// cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Seed of all random streams (overrides the file's; 0 to
+    /// 9223372036854775807, the integers a TOML file can hold).
+    #[arg(long, conflicts_with = "resume", value_parser = seed_parser())]
+    pub seed: Option<u64>,
+    /// Write into a non-empty directory no run wrote, replacing only
+    /// the files a run writes there (points.*, survey.toml,
+    /// trajectory*.csv, summary.json, report.html) and keeping the rest.
+    #[arg(long, conflicts_with = "resume")]
+    pub overwrite: bool,
+    /// Run even if the expected output exceeds the free disk space of
+    /// the output directory or the expected memory is not available
+    /// (see `lidarsim check`).
+    #[arg(long)]
+    pub no_space_check: bool,
+    /// Continue the interrupted run in DIR (with its survey.toml) up to
+    /// the files an uninterrupted run would have written.
+    #[arg(long, value_name = "DIR", conflicts_with = "survey")]
+    pub resume: Option<PathBuf>,
+}
+
+/// The options of `lidarsim check`.
+#[derive(Args)]
+pub struct CheckArgs {
+    /// The survey (TOML).
+    pub survey: PathBuf,
+    /// Output directory whose free space the expected files are
+    /// compared with.
+    #[arg(short, long, default_value = "out")]
+    pub output: PathBuf,
+}
+
+/// The options of `lidarsim waveform`.
+#[derive(Args)]
+pub struct WaveformArgs {
+    /// Output directory of a run (it holds survey.toml, and points.las or
+    /// points.laz for --near).
+    pub dir: PathBuf,
+    /// Pulse number within the flight line given by --line, from 0 (emitted
+    /// at the line's start time + N / PRF). Point files have no pulse
+    /// column: to find a point's pulse use --gps-time or --near.
+    #[arg(long, conflicts_with_all = ["gps_time", "near"])]
+    pub pulse: Option<u64>,
+    /// Flight line number for --pulse, 1 for the first: the point source ID
+    /// of points.las (point_source_id in points.xyz).
+    #[arg(long, default_value_t = 1)]
+    pub line: u32,
+    /// Find the pulse by the GPS time of one of its points: the gps_time of
+    /// any point in points.las, points.xyz or points.ply (it includes the
+    /// survey's output.gps_start_time_s).
+    #[arg(long, conflicts_with = "near")]
+    pub gps_time: Option<f64>,
+    /// Find the pulse of the point of DIR/points.las (or points.laz) nearest
+    /// to X,Y or X,Y,Z, in the coordinates of that file (those of the
+    /// survey plus output.offset_m); horizontal distance without Z.
+    #[arg(long, value_name = "X,Y[,Z]", allow_hyphen_values = true)]
+    pub near: Option<String>,
+    /// Output PNG.
+    #[arg(short, long, default_value = "waveform.png")]
+    pub output: PathBuf,
+}
+
+/// The options of `lidarsim render`.
+#[derive(Args)]
+pub struct RenderArgs {
+    /// The point cloud (LAS or LAZ).
+    pub cloud: PathBuf,
+    /// Output PNG.
+    #[arg(short, long, default_value = "top.png")]
+    pub output: PathBuf,
+    /// Colours: height, intensity, class, return or strip.
+    #[arg(long, default_value = "height")]
+    pub color: String,
+    /// Pixel size, m (default: from the point density).
+    #[arg(long)]
+    pub resolution: Option<f64>,
+    /// Cross-section instead of top view: x0,y0,x1,y1,width (m).
+    #[arg(long, value_name = "X0,Y0,X1,Y1,WIDTH", allow_hyphen_values = true)]
+    pub profile: Option<String>,
+}
+
+/// The options of `lidarsim bench`.
+#[derive(Args)]
+pub struct BenchArgs {
+    /// Write the scenes (OBJ) and surveys (TOML) into DIR and stop.
+    #[arg(long, value_name = "DIR")]
+    pub export: Option<PathBuf>,
+    /// Scenes to measure: flat, terrain (default both).
+    #[arg(long, value_delimiter = ',')]
+    pub scene: Vec<String>,
+    /// Thread counts to run, one run each in this order (default 1,2;
+    /// 1,2,1,2,… also prints the median speed-up over the pairs).
+    #[arg(long, value_delimiter = ',', default_values_t = [1usize, 2])]
+    pub threads: Vec<usize>,
+    /// Working directory for the generated files (default: a temporary one).
+    #[arg(long, value_name = "DIR")]
+    pub work_dir: Option<PathBuf>,
+    /// Pulses of the flight line (default: the benchmark's 500 000;
+    /// fewer for profiling).
+    #[arg(long, default_value_t = lidarsim_bench::PULSES)]
+    pub pulses: u64,
+}
+
+/// Seeds a survey file can hold: TOML integers are signed 64-bit.
+fn seed_parser() -> clap::builder::RangedU64ValueParser<u64> {
+    clap::value_parser!(u64).range(..=i64::MAX as u64)
+}

@@ -1,0 +1,60 @@
+//! How the program speaks: lines on standard output and standard error
+//! that ignore a closed pipe, errors with their exit status, and a
+//! survey's warnings.
+
+use std::process::ExitCode;
+
+use lidarsim::Survey;
+use lidarsim::world::World;
+
+/// Prints a line to standard error, ignoring a closed pipe (`2>&1 | head`).
+macro_rules! note {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), $($arg)*);
+    }};
+}
+
+/// Prints a line to standard output, ignoring a closed pipe (`| head`).
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($arg)*);
+    }};
+}
+
+/// Prints `message` as an error; the exit status is `code`.
+pub fn fail(code: u8, message: &str) -> ExitCode {
+    note!("error: {message}");
+    ExitCode::from(code)
+}
+
+/// Reports every problem of a survey file, exit status 2.
+pub fn fail_survey(e: &lidarsim::survey::SurveyError) -> ExitCode {
+    for (i, d) in e.diagnostics.iter().enumerate() {
+        if i > 0 {
+            note!("");
+        }
+        note!("error: {d}");
+    }
+    if e.diagnostics.len() > 1 {
+        note!("\n{} problems found", e.diagnostics.len());
+    }
+    ExitCode::from(2)
+}
+
+/// The survey's file name for messages (`<demo>` for the built-in one).
+pub fn source_name(survey: &Survey) -> String {
+    survey
+        .source
+        .as_ref()
+        .map_or_else(|| "<demo>".to_string(), |p| p.display().to_string())
+}
+
+/// Prints the survey's and its world's warnings to standard error.
+pub fn warn(survey: &Survey, world: &World) {
+    let file = source_name(survey);
+    for w in &world.warnings_with(survey) {
+        note!("warning: {file}: {w}");
+    }
+}
