@@ -81,7 +81,7 @@ impl PulseTrace {
     }
 
     /// Records the result of the next sub-ray: its hit and the spans that
-    /// [`RayCaster::trace`] left in `spans`.
+    /// [`crate::accel::RayCaster::trace`] left in `spans`.
     pub fn push(&mut self, hit: Option<Hit>, spans: &[VolumeSpan]) {
         self.push_spans(spans);
         self.hits.push(match hit {

@@ -23,7 +23,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::obj::{MeshError, class_from_name, glob_match, mapped_class};
+use super::mesh::{MeshError, class_from_name, glob_match, mapped_class};
 use crate::geometry::{DMat3, DVec3};
 use crate::scene::{Material, MeshPlacement, Primitive, Scene, Shape, Triangle};
 use glam::DMat4;

@@ -6,6 +6,7 @@
 pub mod cloud;
 pub mod gltf;
 pub mod input;
+pub mod mesh;
 pub mod obj;
 pub mod raster;
 pub mod trajectory;

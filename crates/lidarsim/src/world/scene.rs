@@ -60,7 +60,7 @@ pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> B
         };
         if let Err(e) = loaded {
             let at = match &e {
-                crate::io::obj::MeshError::UnmatchedClassPattern { pattern, .. } => {
+                crate::io::mesh::MeshError::UnmatchedClassPattern { pattern, .. } => {
                     key.key("classes").key(pattern)
                 }
                 _ => key.key("file"),

@@ -22,7 +22,7 @@ impl BuildPrim {
 impl Bvh {
     /// Builds the hierarchy over `scene`, which it then owns with its
     /// primitives reordered so that each leaf's are adjacent: the primitive
-    /// numbers of hits index [`RayCaster::scene`], not the scene given.
+    /// numbers of hits index [`crate::accel::RayCaster::scene`], not the scene given.
     pub fn build(scene: Scene) -> Self {
         // The primitives' boxes on all threads; the scene's box from them
         // ([`Scene::bounds`], the same unions in the same order).

@@ -13,13 +13,20 @@
 //! describes the items, and bit 7 of the point data format byte marks the
 //! file as compressed.
 
+mod vlr;
+mod wdp;
+
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
 
 use super::{AtomicFile, OutFile, PointRecord, PointSink, WaveformBlock, file_error};
-use crate::geometry::SPEED_OF_LIGHT_MPS;
+use vlr::{ATTRIBUTE_FIELDS, ERROR_FIELDS, fixed_str};
+pub use wdp::{
+    Digitizer, WAVEFORM_BITS, WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN,
+};
+use wdp::{WavePacketLink, WdpFile, wdp_header, write_wave_packet};
 
 /// Bytes of point records gathered before an uncompressed file is written
 /// (as much as the file's buffer holds, so that they need not pass through
@@ -33,58 +40,6 @@ pub const POINT_FORMAT_6_LEN: u16 = 30;
 /// point waveform location f32, X(t), Y(t), Z(t) f32).
 pub const POINT_FORMAT_9_LEN: u16 = 59;
 const HEADER_SIZE: u16 = 375;
-
-/// Bits per waveform sample in the `.wdp` file.
-pub const WAVEFORM_BITS: u8 = 16;
-/// The digitiser of the stored waveforms: sample spacing and the mapping
-/// of 16-bit counts to amplitude units, `amplitude = offset + gain · count`
-/// (LAS 1.4 R15, Table 17, "Digitizer Gain" and "Digitizer Offset").
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Digitizer {
-    /// Temporal sample spacing, ps.
-    pub bin_ps: u32,
-    /// Amplitude units per count.
-    pub gain: f64,
-    /// Amplitude of count 0.
-    pub offset: f64,
-}
-
-impl Digitizer {
-    /// A digitiser whose counts span `−full_scale / 16 … full_scale`
-    /// amplitude units (the negative part keeps noise below the background
-    /// visible); stronger signals saturate at 65535 as a real digitiser's
-    /// would.
-    pub fn with_full_scale(bin_ps: u32, full_scale: f64) -> Self {
-        let full_scale = if full_scale.is_finite() && full_scale > 0.0 {
-            full_scale
-        } else {
-            1.0
-        };
-        let offset = -full_scale / 16.0;
-        Self {
-            bin_ps,
-            gain: (full_scale - offset) / 65535.0,
-            offset,
-        }
-    }
-
-    /// The count of an amplitude (rounded, saturating at 0 and 65535).
-    pub fn count(&self, amplitude: f64) -> u16 {
-        ((amplitude - self.offset) / self.gain)
-            .round()
-            .clamp(0.0, 65535.0) as u16
-    }
-}
-/// Waveform packets hold a multiple of this many samples; descriptor `i`
-/// (record ID 99 + i) describes packets of `i ×` this many samples.
-pub const WAVEFORM_SAMPLES_STEP: usize = 16;
-/// Number of waveform packet descriptors written (indices 1–255, all the
-/// specification allows), so packets can hold up to 4080 samples.
-pub const WAVEFORM_DESCRIPTORS: usize = 255;
-/// Size of the header at the start of the `.wdp` file (an EVLR header,
-/// LAS 1.4 R15 Table 21), bytes; packet offsets count from the start of the
-/// file, so the first packet is at this offset.
-pub const WDP_HEADER_LEN: u64 = 60;
 
 /// Fixed parts of the header chosen before the first point.
 #[derive(Clone, Debug, PartialEq)]
@@ -134,25 +89,6 @@ impl LasSettings {
         if self.waveform.is_some() { 9 } else { 6 }
     }
 
-    /// The extra-bytes fields, in record order.
-    fn extra_fields(&self) -> impl Iterator<Item = &'static ExtraField> {
-        let a: &'static [ExtraField] = if self.attribute_extra_bytes {
-            &ATTRIBUTE_FIELDS
-        } else {
-            &[]
-        };
-        let e: &'static [ExtraField] = if self.error_extra_bytes {
-            &ERROR_FIELDS
-        } else {
-            &[]
-        };
-        a.iter().chain(e.iter())
-    }
-
-    fn extra_bytes_len(&self) -> u16 {
-        self.extra_fields().map(ExtraField::size).sum()
-    }
-
     /// Bytes of one point record.
     pub fn record_len(&self) -> u16 {
         let base = if self.point_format() == 9 {
@@ -174,84 +110,6 @@ impl LasSettings {
         Ok(LazVlr::from_laz_items(items))
     }
 
-    /// The VLRs between the header and the points.
-    fn vlr_list(&self) -> io::Result<Vec<Vlr>> {
-        let mut list = Vec::new();
-        let fields: Vec<&ExtraField> = self.extra_fields().collect();
-        if !fields.is_empty() {
-            let mut d = Vec::with_capacity(fields.len() * EXTRA_BYTES_DESCRIPTOR_LEN);
-            for f in fields {
-                // Extra Bytes descriptor (Table 24): reserved (2), data type,
-                // options 0 (no no-data/min/max/scale/offset), name (32),
-                // unused (4), no_data, min, max, scale, offset (5 × 24),
-                // description (32).
-                d.extend_from_slice(&[0, 0, f.data_type, 0]);
-                d.extend_from_slice(&fixed_str::<32>(f.name));
-                d.extend_from_slice(&[0u8; 4]);
-                d.extend_from_slice(&[0u8; 24 * 5]);
-                d.extend_from_slice(&fixed_str::<32>(f.description));
-            }
-            list.push(("LASF_Spec", 4, "extra bytes".to_string(), d));
-        }
-        if let Some(dig) = self.waveform {
-            for i in 1..=WAVEFORM_DESCRIPTORS {
-                // Waveform Packet Descriptor (Table 17): bits per sample,
-                // compression type 0, number of samples, temporal sample
-                // spacing (ps), digitizer gain, digitizer offset
-                // (volts = offset + gain · sample).
-                let mut d = Vec::with_capacity(WAVE_DESCRIPTOR_LEN);
-                d.push(WAVEFORM_BITS);
-                d.push(0);
-                d.extend_from_slice(&((i * WAVEFORM_SAMPLES_STEP) as u32).to_le_bytes());
-                d.extend_from_slice(&dig.bin_ps.to_le_bytes());
-                d.extend_from_slice(&dig.gain.to_le_bytes());
-                d.extend_from_slice(&dig.offset.to_le_bytes());
-                debug_assert_eq!(d.len(), WAVE_DESCRIPTOR_LEN);
-                list.push((
-                    "LASF_Spec",
-                    99 + i as u16,
-                    format!("{} samples", i * WAVEFORM_SAMPLES_STEP),
-                    d,
-                ));
-            }
-        }
-        if let Some(wkt) = &self.crs_wkt {
-            // OGC coordinate system WKT (section 2.5): a null-terminated
-            // string.
-            let mut d = wkt.as_bytes().to_vec();
-            d.push(0);
-            if d.len() > usize::from(u16::MAX) {
-                return Err(io::Error::new(
-                    io::ErrorKind::InvalidInput,
-                    "the CRS WKT is longer than a VLR can hold (65535 bytes)",
-                ));
-            }
-            list.push(("LASF_Projection", 2112, "OGC WKT".to_string(), d));
-        }
-        if self.compressed {
-            let mut d = Vec::new();
-            self.laz_vlr()?.write_to(&mut d)?;
-            list.push(("laszip encoded", 22204, "lazrs".to_string(), d));
-        }
-        Ok(list)
-    }
-
-    /// The VLRs' bytes.
-    fn vlrs(&self) -> io::Result<Vec<u8>> {
-        let mut v = Vec::new();
-        for (user, id, description, data) in self.vlr_list()? {
-            // VLR header (Table 13): reserved, user ID, record ID, record
-            // length after header, description.
-            v.extend_from_slice(&0u16.to_le_bytes());
-            v.extend_from_slice(&fixed_str::<16>(user));
-            v.extend_from_slice(&id.to_le_bytes());
-            v.extend_from_slice(&(data.len() as u16).to_le_bytes());
-            v.extend_from_slice(&fixed_str::<32>(&description));
-            v.extend_from_slice(&data);
-        }
-        Ok(v)
-    }
-
     /// Length of an uncompressed LAS file of `points` points with these
     /// settings: header, VLRs and point records.
     pub fn file_len(&self, points: u64) -> u64 {
@@ -260,95 +118,10 @@ impl LasSettings {
     }
 }
 
-/// One extra-bytes field (LAS 1.4 R15, Table 24).
-struct ExtraField {
-    name: &'static str,
-    description: &'static str,
-    /// Data type code: 5 unsigned long, 9 float.
-    data_type: u8,
-}
-
-impl ExtraField {
-    fn size(&self) -> u16 {
-        4
-    }
-}
-
-/// The echo attributes as extra bytes, in record order.
-const ATTRIBUTE_FIELDS: [ExtraField; 5] = [
-    ExtraField {
-        name: "amplitude",
-        description: "echo energy / unit pulse energy",
-        data_type: 9,
-    },
-    ExtraField {
-        name: "echo_width",
-        description: "echo width FWHM (ns)",
-        data_type: 9,
-    },
-    ExtraField {
-        name: "range",
-        description: "range from the sensor (m)",
-        data_type: 9,
-    },
-    ExtraField {
-        name: "incidence_angle",
-        description: "beam to normal (deg), NaN=foliage",
-        data_type: 9,
-    },
-    ExtraField {
-        name: "object_id",
-        description: "scene object that returned it",
-        data_type: 5,
-    },
-];
-
-/// The georeferencing error as extra bytes.
-const ERROR_FIELDS: [ExtraField; 3] = [
-    ExtraField {
-        name: "error_x",
-        description: "computed minus true x (m)",
-        data_type: 9,
-    },
-    ExtraField {
-        name: "error_y",
-        description: "computed minus true y (m)",
-        data_type: 9,
-    },
-    ExtraField {
-        name: "error_z",
-        description: "computed minus true z (m)",
-        data_type: 9,
-    },
-];
-
-/// Size of a VLR header, bytes (LAS 1.4 R15, Table 13).
-const VLR_HEADER_LEN: usize = 54;
-/// Size of one Extra Bytes descriptor, bytes (LAS 1.4 R15, Table 24).
-const EXTRA_BYTES_DESCRIPTOR_LEN: usize = 192;
-/// Size of a Waveform Packet Descriptor, bytes (LAS 1.4 R15, Table 17).
-const WAVE_DESCRIPTOR_LEN: usize = 26;
-
-/// One VLR: user ID, record ID, description, data.
-type Vlr = (&'static str, u16, String, Vec<u8>);
-
 /// Where the points' bytes go: straight to the file or through LASzip.
 enum Body {
     Plain,
     Laz(Box<LasZipCompressor<'static, BufWriter<OutFile>>>),
-}
-
-/// The external waveform file and where its packets go.
-struct WdpFile {
-    /// `None` when another writer writes the same file.
-    file: Option<AtomicFile>,
-    path: PathBuf,
-    /// Offset of the next packet from the start of the file.
-    next_offset: u64,
-    /// Sample spacing and quantisation.
-    digitizer: Digitizer,
-    /// Quantised samples of one packet.
-    buf: Vec<u8>,
 }
 
 /// Streams points into a LAS 1.4 (or LAZ) file; the header (counts,
@@ -592,10 +365,7 @@ impl LasWriter {
         let s = &self.settings;
         let list = self.settings.vlr_list().unwrap_or_default();
         let vlr_count = list.len() as u32;
-        let vlr_bytes: usize = list
-            .iter()
-            .map(|(_, _, _, d)| VLR_HEADER_LEN + d.len())
-            .sum();
+        let vlr_bytes: usize = list.iter().map(vlr::Vlr::len).sum();
         let mut h = Vec::with_capacity(HEADER_SIZE as usize);
         h.extend_from_slice(b"LASF");
         h.extend_from_slice(&s.file_source_id.to_le_bytes());
@@ -781,117 +551,6 @@ impl LasWriter {
     }
 }
 
-/// Where a pulse's packet went in the `.wdp` file.
-#[derive(Clone, Copy, Debug)]
-struct WavePacketLink {
-    /// Descriptor index (1–255).
-    index: u8,
-    /// Byte offset from the start of the `.wdp` file.
-    offset: u64,
-    /// Packet size, bytes.
-    size: u32,
-    /// Two-way time of the first sample, ps.
-    first_sample_ps: f64,
-    /// Samples in the packet.
-    samples: usize,
-}
-
-/// Appends the 29-byte wave packet of format 9 (LAS 1.4 R15, Table 11).
-///
-/// Return point waveform location: ps from the first digitised sample to
-/// the echo. X(t), Y(t), Z(t): the parametric line of the waveform, in
-/// metres per ps, as LASlib reads it: sample `s` lies at
-/// `point + (location − s · spacing) · (X(t), Y(t), Z(t))`, so the first
-/// sample (the "anchor") is at `point + location · (X(t), Y(t), Z(t))` and
-/// the vector points from the echo back towards the scanner: minus the beam
-/// direction times c/2 per ps (two-way time).
-fn write_wave_packet(
-    buf: &mut Vec<u8>,
-    p: &PointRecord,
-    link: Option<WavePacketLink>,
-    bin_ps: u32,
-) {
-    let location = link.map(|l| p.echo_time_ps - l.first_sample_ps);
-    match (link, location) {
-        (Some(l), Some(loc))
-            if loc.is_finite()
-                && loc >= 0.0
-                && loc <= ((l.samples.max(1) - 1) as f64) * f64::from(bin_ps) =>
-        {
-            buf.push(l.index);
-            buf.extend_from_slice(&l.offset.to_le_bytes());
-            buf.extend_from_slice(&l.size.to_le_bytes());
-            buf.extend_from_slice(&(loc as f32).to_le_bytes());
-            let per_ps = -p.beam_dir * (SPEED_OF_LIGHT_MPS / 2.0 * 1e-12);
-            for v in [per_ps.x, per_ps.y, per_ps.z] {
-                buf.extend_from_slice(&(v as f32).to_le_bytes());
-            }
-        }
-        // No waveform for this point (descriptor index 0).
-        _ => buf.extend_from_slice(&[0u8; 29]),
-    }
-}
-
-impl WdpFile {
-    /// Quantises and appends one pulse's samples, padded with zero signal
-    /// to a multiple of [`WAVEFORM_SAMPLES_STEP`] (and cut after
-    /// 255 × 16 samples).
-    fn write_packet(
-        &mut self,
-        samples: &[f32],
-        first_sample_ps: f64,
-    ) -> io::Result<WavePacketLink> {
-        let max = WAVEFORM_DESCRIPTORS * WAVEFORM_SAMPLES_STEP;
-        let used = samples.len().min(max);
-        let n = used.div_ceil(WAVEFORM_SAMPLES_STEP).max(1) * WAVEFORM_SAMPLES_STEP;
-        let count = |v: f64| self.digitizer.count(v);
-        self.buf.clear();
-        for &v in &samples[..used] {
-            self.buf
-                .extend_from_slice(&count(f64::from(v)).to_le_bytes());
-        }
-        let zero = count(0.0);
-        for _ in used..n {
-            self.buf.extend_from_slice(&zero.to_le_bytes());
-        }
-        if let Some(f) = self.file.as_mut() {
-            f.writer().write_all(&self.buf)?;
-        }
-        let link = WavePacketLink {
-            index: (n / WAVEFORM_SAMPLES_STEP) as u8,
-            offset: self.next_offset,
-            size: self.buf.len() as u32,
-            first_sample_ps,
-            samples: used,
-        };
-        self.next_offset += self.buf.len() as u64;
-        Ok(link)
-    }
-}
-
-/// The 60-byte header that starts a `.wdp` file: the EVLR header of the
-/// waveform data packet record (LAS 1.4 R15, Table 21: reserved, user ID
-/// `LASF_Spec`, record ID 65535, record length after header u64,
-/// description), as LASlib writes it.
-fn wdp_header(record_len: u64) -> Vec<u8> {
-    let mut h = Vec::with_capacity(WDP_HEADER_LEN as usize);
-    h.extend_from_slice(&0u16.to_le_bytes());
-    h.extend_from_slice(&fixed_str::<16>("LASF_Spec"));
-    h.extend_from_slice(&65535u16.to_le_bytes());
-    h.extend_from_slice(&record_len.to_le_bytes());
-    h.extend_from_slice(&fixed_str::<32>("lidarsim waveforms"));
-    debug_assert_eq!(h.len() as u64, WDP_HEADER_LEN);
-    h
-}
-
-fn fixed_str<const N: usize>(s: &str) -> [u8; N] {
-    let mut out = [0u8; N];
-    let b = s.as_bytes();
-    let n = b.len().min(N);
-    out[..n].copy_from_slice(&b[..n]);
-    out
-}
-
 impl PointSink for LasWriter {
     fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
         self.encode(points, &WaveformBlock::default())
@@ -922,122 +581,4 @@ impl PointSink for LasWriter {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::geometry::DVec3;
-
-    #[test]
-    fn digitizer_counts_span_minus_a_sixteenth_to_full_scale() {
-        let d = Digitizer::with_full_scale(500, 32.0);
-        assert_eq!(d.offset, -2.0);
-        assert_eq!(d.count(-2.0), 0);
-        assert_eq!(d.count(32.0), 65535);
-        assert_eq!(d.count(1e9), 65535); // saturates
-        assert_eq!(d.count(-1e9), 0);
-        // Zero signal at 1/17 of the range; a count maps back within half a
-        // count.
-        assert_eq!(d.count(0.0), (65535.0f64 / 17.0).round() as u16);
-        let v = 1.234_567;
-        assert!((d.offset + d.gain * f64::from(d.count(v)) - v).abs() <= d.gain / 2.0);
-        // A useless full scale falls back to 1.
-        assert_eq!(
-            Digitizer::with_full_scale(500, f64::NAN).offset,
-            -1.0 / 16.0
-        );
-    }
-
-    fn point(x: f64, t: f64) -> PointRecord {
-        PointRecord {
-            position_m: DVec3::new(x, 2.0, 3.0),
-            gps_time_s: t,
-            intensity: 7,
-            amplitude: 1.0,
-            echo_width_ns: 4.0,
-            range_m: 500.0,
-            beam_dir: DVec3::new(0.0, 0.0, -1.0),
-            error_m: DVec3::ZERO,
-            return_number: 1,
-            number_of_returns: 1,
-            scan_direction_positive: true,
-            edge_of_flight_line: false,
-            scan_angle_deg: 0.0,
-            classification: 2,
-            point_source_id: 1,
-            pulse_index: 0,
-            object_id: 0,
-            incidence_angle_deg: Some(0.0),
-            echo_time_ps: 0.0,
-            component: 0,
-        }
-    }
-
-    /// Records are gathered into megabyte writes across blocks, and a block
-    /// with a coordinate the file cannot hold is refused whole: the file
-    /// then holds exactly the points of the other blocks, in order, as the
-    /// `las` crate reads them back.
-    #[test]
-    fn gathered_blocks_and_a_refused_block() {
-        let dir = std::env::temp_dir().join(format!("lidarsim-las-blocks-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let path = dir.join("blocks.las");
-        let settings = LasSettings {
-            scale_m: 0.001,
-            offset_m: [0.0; 3],
-            origin_m: [0.0; 3],
-            adjusted_standard_gps_time: false,
-            file_source_id: 1,
-            creation_day_year: (1, 2026),
-            generating_software: "test".into(),
-            attribute_extra_bytes: true,
-            error_extra_bytes: false,
-            crs_wkt: None,
-            compressed: false,
-            waveform: None,
-            waveform_file_shared: false,
-        };
-        let mut w = LasWriter::create(&path, settings).unwrap();
-        let len = usize::from(w.settings.record_len());
-        // Blocks of 3 000 points, so that a few blocks fill a write.
-        let per_block = 3000;
-        let blocks = 2 * LAS_WRITE_BYTES / (per_block * len) + 2;
-        let mut want = Vec::new();
-        for b in 0..blocks {
-            let block: Vec<PointRecord> = (0..per_block)
-                .map(|i| point((b * per_block + i) as f64 * 0.01, b as f64))
-                .collect();
-            w.write(&block).unwrap();
-            want.extend(block.iter().map(|p| p.position_m.x));
-            if b == 1 {
-                // 1e9 m / 1 mm does not fit an i32: the block is refused.
-                let mut bad = block.clone();
-                bad[per_block / 2].position_m.x = 1e9;
-                assert!(w.write(&bad).is_err());
-            }
-        }
-        Box::new(w).finish().unwrap();
-        let mut reader = ::las::Reader::from_path(&path).unwrap();
-        assert_eq!(reader.header().number_of_points(), want.len() as u64);
-        let bounds = reader.header().bounds();
-        assert!((bounds.max.x - want[want.len() - 1]).abs() < 1e-6);
-        let got: Vec<f64> = reader
-            .read_all()
-            .unwrap()
-            .points()
-            .map(|p| p.unwrap().x)
-            .collect();
-        assert_eq!(got.len(), want.len());
-        for (g, w) in got.iter().zip(&want) {
-            assert!((g - w).abs() < 1e-6, "{g} vs {w}");
-        }
-        std::fs::remove_dir_all(&dir).ok();
-    }
-
-    #[test]
-    fn wdp_header_is_an_evlr_header() {
-        let h = wdp_header(1234);
-        assert_eq!(h.len() as u64, WDP_HEADER_LEN);
-        assert_eq!(&h[2..11], b"LASF_Spec");
-        assert_eq!(u16::from_le_bytes([h[18], h[19]]), 65535);
-        assert_eq!(u64::from_le_bytes(h[20..28].try_into().unwrap()), 1234);
-    }
-}
+mod tests;
