@@ -19,9 +19,14 @@
 //!   has one sign;
 //! - [`for_each_maximum`] and [`lowest_before_higher`]: the scans of
 //!   echo detection over a waveform.
+//!
+//! [`cpu`] asks the processor whether it has what the build was compiled
+//! for, so that a program can refuse to start rather than die on its first
+//! AVX2 instruction.
 
 #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
 mod avx;
+pub mod cpu;
 pub mod scalar;
 
 use crate::geometry::DVec3;
