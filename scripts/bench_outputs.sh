@@ -5,4 +5,4 @@
 # suite.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo bench -p lidarsim --bench outputs --quiet
+cargo bench -p lidarsim-bench --bench outputs --quiet
