@@ -19,6 +19,8 @@ echo "== cargo test, portable build (-C target-cpu=x86-64: the scalar kernels)"
 CARGO_TARGET_DIR=target/portable RUSTFLAGS="-C target-cpu=x86-64" cargo test --quiet
 echo "== demo + independent LAS check (laspy)"
 scripts/check_las.sh
+echo "== the scalar kernels write the same bytes as the AVX2 kernels"
+scripts/check_portable.sh
 echo "== memory stays flat in flight length; 100 M pulses in 1 GiB"
 python3 scripts/check_memory.py target/release/lidarsim
 echo "== all checks passed"
