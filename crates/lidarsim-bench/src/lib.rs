@@ -2,7 +2,7 @@
 //! measurement of a run on them (a crate of its own, beside the library,
 //! so that process clocks and `/proc` reads stay out of its API).
 //!
-//! Two scenes, generated procedurally and written as OBJ meshes with a
+//! Three scenes, generated procedurally and written as OBJ meshes with a
 //! survey file so that other simulators can be run on identical input
 //! (`lidarsim bench --export DIR`):
 //!
@@ -12,6 +12,10 @@
 //!   x, y ∈ [−200, 200] m with
 //!   `z = 10 + 8 sin(x/37) cos(y/53) + 4 sin((x+2y)/11) + 1.5 cos((3x−y)/4.3)
 //!   + 0.4 sin(1.7x) sin(1.3y)`, and the same five boxes standing on it.
+//! - **forest**: the flat scene's ground under a generated mixed stand
+//!   (`[[forest]]`: 600 stems/ha of pine 0.5, spruce 0.3 and birch 0.2,
+//!   12–26 m tall, 2 m apart at least) over the whole 400 m × 400 m, so
+//!   that the swath lies inside it: about 9 600 trees.
 //!
 //! The survey is the reference simulator's benchmark: oscillating mirror,
 //! 100 kHz, 50 Hz, ±20°, 0.5 mrad divergence, 19 sub-rays, 4 ns pulse, full
@@ -38,17 +42,20 @@ pub enum BenchScene {
     Flat,
     /// One-million-triangle height grid and five boxes.
     Terrain,
+    /// Flat ground under a 600 stems/ha mixed stand.
+    Forest,
 }
 
 impl BenchScene {
-    /// Both scenes, in the order they are measured.
-    pub const ALL: [BenchScene; 2] = [BenchScene::Flat, BenchScene::Terrain];
+    /// All scenes, in the order they are measured.
+    pub const ALL: [BenchScene; 3] = [BenchScene::Flat, BenchScene::Terrain, BenchScene::Forest];
 
     /// Name used on the command line and in file names.
     pub fn name(self) -> &'static str {
         match self {
             BenchScene::Flat => "flat",
             BenchScene::Terrain => "terrain",
+            BenchScene::Forest => "forest",
         }
     }
 
@@ -93,7 +100,7 @@ pub fn write_ground_obj(scene: BenchScene, path: &Path) -> io::Result<()> {
     writeln!(w, "g ground")?;
     let mut line = String::with_capacity(64);
     match scene {
-        BenchScene::Flat => {
+        BenchScene::Flat | BenchScene::Forest => {
             let h = HALF_SIDE_M;
             for (x, y) in [(-h, -h), (h, -h), (h, h), (-h, h)] {
                 writeln!(w, "v {x} {y} 0")?;
@@ -138,7 +145,7 @@ pub fn write_ground_obj(scene: BenchScene, path: &Path) -> io::Result<()> {
 /// walls reach into the ground).
 fn box_base(scene: BenchScene, b: &[f64; 5]) -> (f64, f64) {
     match scene {
-        BenchScene::Flat => (0.0, b[4]),
+        BenchScene::Flat | BenchScene::Forest => (0.0, b[4]),
         BenchScene::Terrain => {
             // The terrain varies by at most ±13.9 m around 10 m.
             let top = terrain_height(b[0], b[1]) + b[4];
@@ -211,10 +218,9 @@ pub fn write_boxes_obj(scene: BenchScene, path: &Path) -> io::Result<()> {
 /// Pulses of the benchmark's flight line (300 m at 60 m/s and 100 kHz).
 pub const PULSES: u64 = 500_000;
 
-/// The benchmark survey, with its meshes at `ground` and `boxes` (paths
-/// written as given) and a flight line of `pulses` pulses (the benchmark's
-/// [`PULSES`], or fewer for profiling), starting at x = −150 m.
-pub fn survey_toml(ground: &str, boxes: &str, pulses: u64) -> String {
+/// The benchmark's survey settings: seed, scanner, output and a flight
+/// line of `pulses` pulses starting at x = −150 m.
+fn survey_head(pulses: u64) -> String {
     let end_x = -150.0 + pulses as f64 / 100_000.0 * 60.0;
     format!(
         r#"# lidarsim benchmark survey (the reference simulator's settings):
@@ -241,35 +247,75 @@ speed_mps = 60.0
 
 [materials.ground]
 reflectance = 0.2
-
-[materials.building]
-reflectance = 0.5
-
-[[mesh]]
-file = "{ground}"
-material = "ground"
-class = "ground"
-
-[[mesh]]
-file = "{boxes}"
-material = "building"
-class = "roof"
 "#
     )
 }
 
+/// The `[[mesh]]` table of the ground at `ground`.
+fn ground_mesh(ground: &str) -> String {
+    format!(
+        r#"
+[[mesh]]
+file = "{ground}"
+material = "ground"
+class = "ground"
+"#
+    )
+}
+
+/// The benchmark survey, with its meshes at `ground` and `boxes` (paths
+/// written as given) and a flight line of `pulses` pulses (the benchmark's
+/// [`PULSES`], or fewer for profiling), starting at x = −150 m.
+pub fn survey_toml(ground: &str, boxes: &str, pulses: u64) -> String {
+    let mut s = survey_head(pulses);
+    s.push_str("\n[materials.building]\nreflectance = 0.5\n");
+    s.push_str(&ground_mesh(ground));
+    let _ = write!(
+        s,
+        "\n[[mesh]]\nfile = \"{boxes}\"\nmaterial = \"building\"\nclass = \"roof\"\n"
+    );
+    s
+}
+
+/// The forest benchmark survey: the ground mesh at `ground` under a
+/// generated stand over the whole ground, and a flight line of `pulses`
+/// pulses. The line's swath (±182 m at 500 m) lies inside the stand.
+pub fn forest_survey_toml(ground: &str, pulses: u64) -> String {
+    let h = HALF_SIDE_M;
+    survey_head(pulses)
+        + &ground_mesh(ground)
+        + &format!(
+            r#"
+# A mixed stand of 600 stems/ha over the whole ground (about 9 600 trees).
+[[forest]]
+rectangle_m = [{x0:.1}, {x0:.1}, {h:.1}, {h:.1}]
+stems_per_ha = 600
+species = {{ pine = 0.5, spruce = 0.3, birch = 0.2 }}
+height_m = [12.0, 26.0]
+min_spacing_m = 2.0
+seed = 3
+"#,
+            x0 = -h
+        )
+}
+
 /// Writes a scene's OBJ files and survey (a line of `pulses` pulses) into
-/// `dir` as `NAME-ground.obj`, `NAME-buildings.obj` and `NAME.toml`;
-/// returns the survey's path.
+/// `dir` as `NAME-ground.obj`, `NAME-buildings.obj` (not for the forest)
+/// and `NAME.toml`; returns the survey's path.
 pub fn export(scene: BenchScene, dir: &Path, pulses: u64) -> io::Result<std::path::PathBuf> {
     std::fs::create_dir_all(dir)?;
     let name = scene.name();
     let ground = format!("{name}-ground.obj");
-    let boxes = format!("{name}-buildings.obj");
     write_ground_obj(scene, &dir.join(&ground))?;
-    write_boxes_obj(scene, &dir.join(&boxes))?;
+    let text = if scene == BenchScene::Forest {
+        forest_survey_toml(&ground, pulses)
+    } else {
+        let boxes = format!("{name}-buildings.obj");
+        write_boxes_obj(scene, &dir.join(&boxes))?;
+        survey_toml(&ground, &boxes, pulses)
+    };
     let survey = dir.join(format!("{name}.toml"));
-    std::fs::write(&survey, survey_toml(&ground, &boxes, pulses))?;
+    std::fs::write(&survey, text)?;
     Ok(survey)
 }
 

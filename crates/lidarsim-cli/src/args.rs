@@ -32,7 +32,7 @@ pub enum Command {
     Waveform(WaveformArgs),
     /// Render a LAS or LAZ file (ours or anyone's) as a top view or a cross-section PNG.
     Render(RenderArgs),
-    /// Measure speed on the benchmark scenes (flat, 1 M-triangle terrain).
+    /// Measure speed on the benchmark scenes (flat, 1 M-triangle terrain, forest stand).
     Bench(BenchArgs),
 }
 
@@ -162,7 +162,7 @@ pub struct BenchArgs {
     /// Write the scenes (OBJ) and surveys (TOML) into DIR and stop.
     #[arg(long, value_name = "DIR")]
     pub export: Option<PathBuf>,
-    /// Scenes to measure: flat, terrain (default both).
+    /// Scenes to measure: flat, terrain, forest (default all three).
     #[arg(long, value_delimiter = ',')]
     pub scene: Vec<String>,
     /// Thread counts to run, one run each in this order (default 1,2;

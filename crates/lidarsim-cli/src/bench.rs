@@ -38,8 +38,9 @@ fn bench(
         scenes
             .iter()
             .map(|n| {
-                BenchScene::from_name(n)
-                    .ok_or_else(|| format!("unknown bench scene '{n}'; expected flat or terrain"))
+                BenchScene::from_name(n).ok_or_else(|| {
+                    format!("unknown bench scene '{n}'; expected flat, terrain or forest")
+                })
             })
             .collect::<Result<_, _>>()?
     };
