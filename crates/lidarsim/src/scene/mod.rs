@@ -16,7 +16,7 @@ pub mod tree;
 mod triangle;
 
 pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
-pub use tree::{Crown, Species, TreeSpec, Trunk};
+pub use tree::{Crown, CrownLevel, Species, TreeSpec, Trunk};
 pub use triangle::{
     Coverage, EdgeTest, Straddle, Triangle, TriangleFan, bundle_cone, bundle_spread,
 };

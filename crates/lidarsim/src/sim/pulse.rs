@@ -19,7 +19,7 @@ use super::scratch::Scratch;
 use super::truth::{ReturnSource, dominant_surface};
 use super::{COMPONENT_FOLIAGE, COMPONENT_SURFACE, COMPONENT_TRUNK, NOISE_CLASS};
 use crate::accel::{Hit, PulseTrace, VolumeSpan};
-use crate::canopy::{Fate, march};
+use crate::canopy::Fate;
 use crate::geometry::{DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
 use crate::output::{NO_OBJECT, PointRecord};
 use crate::radiometry::surface_return;
@@ -170,12 +170,12 @@ impl Simulator<'_> {
             fine_trace,
             returns,
             sources,
+            canopy,
             ..
         } = scratch;
         let scene = self.caster.scene();
         let rn = self.survey.receiver.reference_range_m;
         let mut speckle_rng: Option<Stream> = None;
-        let mut canopy_rng: Option<Stream> = None;
         returns.clear();
         sources.clear();
         // Eq. 2 at the surface a sub-ray of energy `share` reached.
@@ -214,18 +214,28 @@ impl Simulator<'_> {
             }
             return;
         }
-        let mut emit = |dir: &DVec3, share: f64, hit: Option<Hit>, crowns: &[VolumeSpan]| {
-            let fate = if crowns.is_empty() {
-                Fate::Passed { transmission: 1.0 }
+        // Every sub-ray through the crowns, the pulse's together.
+        let t_min = self.survey.scanner.min_range_m;
+        let t_max = self.survey.scanner.max_range_m;
+        canopy.clear();
+        let mut lane = |dir: &DVec3, hit: Option<Hit>, crowns: &[VolumeSpan]| {
+            canopy.push(*dir, t_min, hit.map_or(t_max, |h| h.t), crowns);
+        };
+        let mut f = 0;
+        for (i, dir) in dirs.iter().enumerate() {
+            if refined && refine[i] {
+                for _ in 0..FINE_PER_CELL {
+                    lane(&fine_dirs[f], fine_trace.hit(f), fine_trace.spans_of(f));
+                    f += 1;
+                }
             } else {
-                let ray = Ray {
-                    origin: em.origin,
-                    dir: *dir,
-                };
-                let rng = canopy_rng.get_or_insert_with(|| stream(Purpose::Canopy));
-                march(scene, &ray, crowns, &self.canopy, rng)
-            };
-            let (range_m, prim, mut power, normal) = match fate {
+                lane(dir, trace.hit(i), trace.spans_of(i));
+            }
+        }
+        canopy.run(scene, em.origin, &self.canopy, &mut stream(Purpose::Canopy));
+        let fates = canopy.fates();
+        let mut emit = |lane: usize, dir: &DVec3, share: f64, hit: Option<Hit>| {
+            let (range_m, prim, mut power, normal) = match fates[lane] {
                 Fate::Intercepted {
                     t,
                     prim,
@@ -257,20 +267,17 @@ impl Simulator<'_> {
             returns.push(Return { range_m, power });
             sources.push(ReturnSource { prim, normal });
         };
-        let mut f = 0;
+        let (mut f, mut k) = (0, 0);
         for (i, dir) in dirs.iter().enumerate() {
             if refined && refine[i] {
                 for _ in 0..FINE_PER_CELL {
-                    emit(
-                        &fine_dirs[f],
-                        fine[f].1,
-                        fine_trace.hit(f),
-                        fine_trace.spans_of(f),
-                    );
+                    emit(k, &fine_dirs[f], fine[f].1, fine_trace.hit(f));
                     f += 1;
+                    k += 1;
                 }
             } else {
-                emit(dir, share, trace.hit(i), trace.spans_of(i));
+                emit(k, dir, share, trace.hit(i));
+                k += 1;
             }
         }
     }

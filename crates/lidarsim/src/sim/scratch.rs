@@ -3,6 +3,7 @@
 use super::frames::FrameCache;
 use super::truth::ReturnSource;
 use crate::accel::{PulseTrace, VolumeSpan};
+use crate::canopy::PulseMarch;
 use crate::detection::{DetectScratch, Echo};
 use crate::geometry::DVec3;
 use crate::waveform::{Return, Waveform};
@@ -24,6 +25,8 @@ pub struct Scratch {
     pub(super) fine_dirs: Vec<DVec3>,
     /// Their closest hits and crown spans.
     pub(super) fine_trace: PulseTrace,
+    /// The sub-rays' march through the crowns.
+    pub(super) canopy: PulseMarch,
     /// Working storage of the traversal.
     pub(super) spans: Vec<VolumeSpan>,
     /// Sub-ray returns: range and power.

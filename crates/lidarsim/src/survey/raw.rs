@@ -243,6 +243,9 @@ pub struct RawVegetation {
     /// How intercepting foliage returns a sub-ray: `"physical"` (default)
     /// or `"specification"`.
     pub return_model: Option<String>,
+    /// How sub-rays are taken through crowns: `"pulse"` (default) or
+    /// `"sub-ray"`.
+    pub march: Option<String>,
 }
 
 /// `[[tree]]`.

@@ -3,7 +3,7 @@
 //! [`crate::world`]).
 
 use super::{Checker, outline};
-use crate::canopy::{CanopyConfig, ReturnModel};
+use crate::canopy::{CanopyConfig, Marching, ReturnModel};
 use crate::message::num;
 use crate::scene::forest::ForestSpec;
 use crate::scene::{Species, TreeSpec};
@@ -51,10 +51,25 @@ pub(crate) fn vegetation(c: &mut Checker, raw: &RawSurvey) -> (CanopyConfig, f64
             0.0
         }
     };
+    let marching = match v.march.as_deref() {
+        None => Marching::default(),
+        Some(name) => Marching::from_name(name).unwrap_or_else(|| {
+            c.err(
+                vp.key("march"),
+                format!(
+                    "unknown march '{name}'; expected \"pulse\" (the default: all sub-rays \
+                     of a pulse together) or \"sub-ray\" (the reference: each sub-ray with a \
+                     lottery at every step)"
+                ),
+            );
+            Marching::default()
+        }),
+    };
     let canopy = CanopyConfig {
         step_m: c.number(vp.key("step_m"), v.step_m, 0.3, 0.01, false, 10.0, " m"),
         partial_blocking,
         return_model,
+        marching,
     };
     let whorl = c.number(
         vp.key("whorl_spacing_m"),

@@ -1,0 +1,225 @@
+//! Tests of the marches through crowns.
+use super::*;
+use crate::accel::{Bvh, RayCaster};
+use crate::geometry::{DVec3, Ray};
+use crate::rng::{Purpose, Stream};
+use crate::scene::{Material, Primitive, Scene, Shape, Species, SurfaceClass, TreeSpec};
+
+fn one_tree(uniform: Option<f64>, k: f64) -> Bvh {
+    let mut scene = Scene::default();
+    let foliage = scene.add_material(Material {
+        name: "f".into(),
+        reflectance: 0.4,
+        incidence_exponent: 0.0,
+    });
+    let obj = scene.add_object("tree");
+    let mut spec = TreeSpec::new(DVec3::ZERO, Species::Spruce, 0.3, 20.0, 6.0);
+    spec.uniform_density = uniform;
+    spec.extinction_per_m = k;
+    scene.primitives.push(Primitive {
+        shape: Shape::Crown(Box::new(spec.crown(0.3))),
+        material: foliage,
+        class: SurfaceClass::Vegetation,
+        object: obj,
+    });
+    Bvh::build(scene)
+}
+
+/// Fraction of vertical rays at horizontal offset `x` that cross the
+/// crown, and the analytic `exp(−k ∫ρ ds)`.
+fn crossing(bvh: &Bvh, x: f64, k: f64, rho: f64) -> (f64, f64) {
+    let ray = Ray::new(DVec3::new(x, 0.0, 100.0), -DVec3::Z);
+    let mut spans = Vec::new();
+    bvh.trace(&ray, 0.0, 1e9, &mut spans);
+    let Shape::Crown(c) = &bvh.scene().primitives[0].shape else {
+        unreachable!()
+    };
+    // Path length inside the envelope along the vertical line, by fine
+    // sampling of the envelope test.
+    let inside = (0..200_000)
+        .filter(|i| c.contains(DVec3::new(x, 0.0, 6.0 + *i as f64 * 1e-4)))
+        .count() as f64
+        * 1e-4;
+    let n = 20_000;
+    let passed = (0..n)
+        .filter(|&i| {
+            let mut rng = Stream::new(1, 0, i, Purpose::Canopy);
+            matches!(
+                march(
+                    bvh.scene(),
+                    &ray,
+                    &spans,
+                    &CanopyConfig::default(),
+                    &mut rng
+                ),
+                Fate::Passed { .. }
+            )
+        })
+        .count() as f64
+        / n as f64;
+    (passed, (-k * rho * inside).exp())
+}
+
+#[test]
+fn crossing_probability_is_beer_lambert() {
+    for (k, rho) in [(0.3, 0.5), (0.6, 0.5), (0.6, 0.9)] {
+        let bvh = one_tree(Some(rho), k);
+        for x in [0.0, 0.8] {
+            let (got, want) = crossing(&bvh, x, k, rho);
+            assert!(
+                (got - want).abs() < 0.02 + 0.05 * want,
+                "k={k} ρ={rho} x={x}: {got} vs {want}"
+            );
+        }
+    }
+}
+
+#[test]
+fn interceptions_lie_inside_the_envelope_and_depths_vary() {
+    let bvh = one_tree(None, 0.9);
+    let Shape::Crown(c) = &bvh.scene().primitives[0].shape else {
+        unreachable!()
+    };
+    let ray = Ray::new(DVec3::new(0.4, 0.3, 100.0), -DVec3::Z);
+    let mut spans = Vec::new();
+    bvh.trace(&ray, 0.0, 1e9, &mut spans);
+    let mut depths = Vec::new();
+    for i in 0..2000 {
+        let mut rng = Stream::new(2, 0, i, Purpose::Canopy);
+        if let Fate::Intercepted {
+            t,
+            density,
+            transmission,
+            ..
+        } = march(
+            bvh.scene(),
+            &ray,
+            &spans,
+            &CanopyConfig::default(),
+            &mut rng,
+        ) {
+            let p = ray.at(t);
+            assert!(c.contains(p));
+            assert!((c.density_at(p) - density).abs() < 1e-12 && density > 0.0);
+            assert!(transmission > 0.0 && transmission <= 1.0);
+            depths.push(t);
+        }
+    }
+    assert!(depths.len() > 1000);
+    let lo = depths.iter().cloned().fold(f64::MAX, f64::min);
+    let hi = depths.iter().cloned().fold(f64::MIN, f64::max);
+    assert!(hi - lo > 5.0, "interceptions spread over the crown depth");
+}
+
+/// The crown of `one_tree`.
+fn crown_of(bvh: &Bvh) -> &crate::scene::Crown {
+    let Shape::Crown(c) = &bvh.scene().primitives[0].shape else {
+        unreachable!()
+    };
+    c
+}
+
+#[test]
+fn the_density_at_a_level_is_the_density_at_a_point() {
+    // Pine, spruce and birch shapes (c = 0.6, 0.9, 0.5): the levels' table
+    // of χ^c and tabulated whorl rotation against `density_at`'s powf and
+    // sin_cos, at points all over the crown.
+    for species in [Species::Pine, Species::Spruce, Species::Birch] {
+        let mut spec = TreeSpec::new(DVec3::new(3.0, -2.0, 1.0), species, 0.3, 20.0, 6.0);
+        spec.seed = 17;
+        let c = spec.crown(0.3);
+        let mut rng = Stream::new(5, 0, 0, Purpose::Canopy);
+        let (mut inside, mut worst) = (0, 0.0f64);
+        for _ in 0..20_000 {
+            let p = DVec3::new(
+                3.0 + (rng.uniform() - 0.5) * 2.0 * c.max_radius_m(),
+                -2.0 + (rng.uniform() - 0.5) * 2.0 * c.max_radius_m(),
+                1.0 + 6.0 + rng.uniform() * 14.0,
+            );
+            let level = c.level(p.z).expect("within the crown's heights");
+            let got = level.density(p.x - 3.0, p.y + 2.0);
+            let want = c.density_at(p);
+            // Points within 0.1 mm of the envelope may fall either side.
+            let (chi, r) = ((21.0 - p.z) / 14.0, level.radius);
+            let d = (p.x - 3.0).hypot(p.y + 2.0);
+            if (d - r).abs() < 1e-4 || chi < 1e-3 {
+                continue;
+            }
+            inside += usize::from(want > 0.0);
+            worst = worst.max((got - want).abs());
+        }
+        assert!(inside > 3000, "{species:?}: {inside} points inside");
+        assert!(worst < 1e-4, "{species:?}: largest difference {worst}");
+    }
+}
+
+/// The fates of `n` sub-rays from `(x, 0, 1000)` that pass 1 cm apart
+/// near the ground, over `pulses` pulses, through the pulse march.
+fn pulse_fates(bvh: &Bvh, x: f64, n: usize, pulses: u64) -> Vec<Fate> {
+    let mut march = PulseMarch::default();
+    let mut spans = Vec::new();
+    let mut fates = Vec::new();
+    let origin = DVec3::new(x, 0.0, 1000.0);
+    for k in 0..pulses {
+        march.clear();
+        for i in 0..n {
+            let dir = DVec3::new(0.01 * i as f64, 0.0, -1000.0).normalize();
+            let ray = Ray::new(origin, dir);
+            bvh.trace(&ray, 0.0, 1e9, &mut spans);
+            march.push(ray.dir, 0.0, 1000.0, &spans);
+        }
+        let mut rng = Stream::new(3, 0, k, Purpose::Canopy);
+        march.run(bvh.scene(), origin, &CanopyConfig::default(), &mut rng);
+        fates.extend_from_slice(march.fates());
+    }
+    fates
+}
+
+#[test]
+fn the_pulse_march_crosses_with_the_beer_lambert_probability() {
+    for (k, rho) in [(0.3, 0.5), (0.6, 0.9)] {
+        let bvh = one_tree(Some(rho), k);
+        for x in [0.0, 0.8] {
+            let (_, want) = crossing(&bvh, x, k, rho);
+            let fates = pulse_fates(&bvh, x, 8, 2500);
+            let passed = fates
+                .iter()
+                .filter(|f| matches!(f, Fate::Passed { .. }))
+                .count() as f64
+                / fates.len() as f64;
+            assert!(
+                (passed - want).abs() < 0.02 + 0.05 * want,
+                "k={k} ρ={rho} x={x}: {passed} vs {want}"
+            );
+        }
+    }
+}
+
+#[test]
+fn pulse_march_interceptions_lie_in_the_crown() {
+    let bvh = one_tree(None, 0.9);
+    let c = crown_of(&bvh);
+    let fates = pulse_fates(&bvh, 0.4, 8, 500);
+    let mut depths = Vec::new();
+    for f in &fates {
+        if let Fate::Intercepted {
+            t,
+            density,
+            transmission,
+            ..
+        } = *f
+        {
+            let z = 1000.0 - t * 1000.0 / 1000.0f64.hypot(0.01 * 4.0);
+            let (z_base, z_top) = c.z_range();
+            // Within the crown's heights, and the density there positive
+            // (the cell, at most one step of 0.3 m, may reach past it).
+            assert!(z <= z_top && z >= z_base - 0.3, "z {z}");
+            assert!(density > 0.0 && transmission == 1.0);
+            depths.push(t);
+        }
+    }
+    assert!(depths.len() > 2000);
+    let lo = depths.iter().cloned().fold(f64::MAX, f64::min);
+    let hi = depths.iter().cloned().fold(f64::MIN, f64::max);
+    assert!(hi - lo > 5.0, "interceptions spread over the crown depth");
+}
