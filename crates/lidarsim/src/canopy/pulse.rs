@@ -69,6 +69,8 @@ pub struct PulseMarch {
     depth: Vec<f64>,
     transmission: Vec<f64>,
     level_depth: Vec<f64>,
+    /// The sub-ray (its index as pushed) of each column above.
+    lane: Vec<u32>,
     // Per crown open at a level: each sub-ray's optical depth in the cell.
     rows: Vec<f64>,
     row_crowns: Vec<(u32, f64)>,
@@ -210,6 +212,8 @@ impl PulseMarch {
         self.transmission.resize(n, 1.0);
         self.level_depth.clear();
         self.level_depth.resize(n, 0.0);
+        self.lane.clear();
+        self.lane.extend(0..n as u32);
 
         let z_first = self.met[0]
             .z_top
@@ -220,11 +224,9 @@ impl PulseMarch {
             .map(|m| m.z_base)
             .fold(f64::MAX, f64::min)
             .max(self.z_lo.iter().copied().fold(f64::MAX, f64::min));
-        let mut open = n - self
-            .z_hi
-            .iter()
-            .filter(|z| **z == f64::NEG_INFINITY)
-            .count();
+        // Only sub-rays that meet a crown take part.
+        self.compact();
+        let mut open = self.lane.len();
         let mut j = 0u64;
         let mut below = 0usize;
         while open > 0 {
@@ -248,6 +250,10 @@ impl PulseMarch {
                     None => break,
                 }
             }
+            if open * 2 <= self.lane.len() {
+                self.compact();
+            }
+            let n = self.lane.len();
             let dz = z - o.z;
             let reach = spread * dz.abs();
             self.rows.clear();
@@ -317,7 +323,8 @@ impl PulseMarch {
                     pick -= x;
                 }
                 let (prim, k) = self.row_crowns[chosen];
-                let d = self.dirs[i];
+                let lane = self.lane[i] as usize;
+                let d = self.dirs[lane];
                 let t_level = dz / d.z;
                 let top = self
                     .met
@@ -326,9 +333,9 @@ impl PulseMarch {
                     .map_or(z, |m| m.z_top);
                 let t = (t_level + (reached / tau - 0.5) * self.step[i])
                     .max((top - o.z) / d.z)
-                    .max(self.t_start[i])
-                    .min(self.t_stop[i].next_down());
-                self.fates[i] = Fate::Intercepted {
+                    .max(self.t_start[lane])
+                    .min(self.t_stop[lane].next_down());
+                self.fates[lane] = Fate::Intercepted {
                     t,
                     prim,
                     density: self.rows[chosen * n + i] / (k * self.step[i]),
@@ -338,11 +345,46 @@ impl PulseMarch {
                 open -= 1;
             }
         }
-        for (fate, &kept) in self.fates.iter_mut().zip(&self.transmission) {
-            if let Fate::Passed { transmission } = fate {
+        for (&lane, &kept) in self.lane.iter().zip(&self.transmission) {
+            if let Fate::Passed { transmission } = &mut self.fates[lane as usize] {
                 *transmission = kept;
             }
         }
+    }
+
+    /// Drops the columns of sub-rays that are no longer open (intercepted,
+    /// or meeting no crown), so that the loops run over the others only.
+    fn compact(&mut self) {
+        let mut kept = 0;
+        for i in 0..self.lane.len() {
+            if self.z_hi[i] == f64::NEG_INFINITY {
+                continue;
+            }
+            self.slope_x[kept] = self.slope_x[i];
+            self.slope_y[kept] = self.slope_y[i];
+            self.step[kept] = self.step[i];
+            self.z_hi[kept] = self.z_hi[i];
+            self.z_lo[kept] = self.z_lo[i];
+            self.threshold[kept] = self.threshold[i];
+            self.depth[kept] = self.depth[i];
+            self.transmission[kept] = self.transmission[i];
+            self.lane[kept] = self.lane[i];
+            kept += 1;
+        }
+        for v in [
+            &mut self.slope_x,
+            &mut self.slope_y,
+            &mut self.step,
+            &mut self.z_hi,
+            &mut self.z_lo,
+            &mut self.threshold,
+            &mut self.depth,
+            &mut self.transmission,
+            &mut self.level_depth,
+        ] {
+            v.truncate(kept);
+        }
+        self.lane.truncate(kept);
     }
 }
 
