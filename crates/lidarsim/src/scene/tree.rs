@@ -527,7 +527,7 @@ impl Crown {
 
     /// What the density depends on at world height `z`, for
     /// [`CrownLevel::density`]; `None` above or below the crown. The
-    /// envelope radius comes from a table ([`shape_factor`]) and the
+    /// envelope radius comes from a table of `χ^c` and the
     /// whorl's rotation from the stored phase turned by a tabulated
     /// multiple of the golden angle, so that no `powf` or `sin_cos` is
     /// left per step.
