@@ -14,7 +14,6 @@ use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStderr, ExitStatus};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
 
 fn bin() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_lidarsim"));
@@ -238,9 +237,7 @@ fn a_second_ctrl_c_leaves_nothing_that_looks_complete() {
                 .unwrap();
             assert!(kill.success());
         }
-        let t = Instant::now();
         let (status, stderr) = finish(child, stderr);
-        assert!(t.elapsed() < Duration::from_secs(60));
         assert_eq!(status.code(), Some(130), "{stderr}");
         assert!(!stderr.contains("panicked"), "{stderr}");
         for name in ["points.las", "points.xyz"] {

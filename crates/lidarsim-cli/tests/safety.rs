@@ -3,46 +3,23 @@
 //! earlier run's files beside its own summary, and never accepts a seed
 //! its own survey.toml could not hold.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
+use std::sync::LazyLock;
+
+mod common;
+
+use common::{GOOD, temp};
 
 fn bin() -> Command {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_lidarsim"));
+    let mut c = common::bin();
     c.env("SOURCE_DATE_EPOCH", "1790000000");
     c
 }
 
-fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("lidarsim-safety-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-const SURVEY: &str = r#"# my own survey, with my comments
-seed = 3
-
-[scanner]
-prf_hz = 20000
-scan_frequency_hz = 40
-scan_angle_deg = 15
-
-[[flight_line]]
-start_m = [0.0, -10.0, 300.0]
-end_m = [0.0, 10.0, 300.0]
-speed_mps = 50.0
-
-[output]
-formats = ["las", "xyz"]
-
-[materials.grass]
-reflectance = 0.4
-
-[[polygon]]
-material = "grass"
-class = "ground"
-vertices_m = [[-300, -300, 0], [300, -300, 0], [300, 300, 0], [-300, 300, 0]]
-"#;
+/// A user's survey: the shared good one under a comment of their own.
+static SURVEY: LazyLock<String> =
+    LazyLock::new(|| format!("# my own survey, with my comments\n{GOOD}"));
 
 fn run(survey: &Path, out: &Path, extra: &[&str]) -> Output {
     bin()
@@ -68,14 +45,14 @@ fn names(dir: &Path) -> Vec<String> {
 fn run_into_the_surveys_own_directory_keeps_the_survey() {
     let dir = temp("own");
     let survey = dir.join("survey.toml");
-    std::fs::write(&survey, SURVEY).unwrap();
+    std::fs::write(&survey, &*SURVEY).unwrap();
     for extra in [&[][..], &["--overwrite"][..]] {
         let o = run(&survey, &dir, extra);
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{stderr}");
         assert!(!stderr.contains("panicked"), "{stderr}");
         assert!(stderr.contains("write over this input"), "{stderr}");
-        assert_eq!(std::fs::read_to_string(&survey).unwrap(), SURVEY);
+        assert_eq!(std::fs::read_to_string(&survey).unwrap(), *SURVEY);
         assert_eq!(names(&dir), ["survey.toml"]);
     }
     std::fs::remove_dir_all(&dir).ok();
@@ -85,7 +62,7 @@ fn run_into_the_surveys_own_directory_keeps_the_survey() {
 fn a_foreign_directory_needs_overwrite_and_keeps_its_other_files() {
     let dir = temp("foreign");
     let survey = dir.join("s.toml");
-    std::fs::write(&survey, SURVEY).unwrap();
+    std::fs::write(&survey, &*SURVEY).unwrap();
     let out = dir.join("data");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("field-notes.txt"), "mine").unwrap();
@@ -106,7 +83,7 @@ fn a_foreign_directory_needs_overwrite_and_keeps_its_other_files() {
 fn a_planted_partial_link_does_not_overwrite_its_target() {
     let dir = temp("link");
     let survey = dir.join("s.toml");
-    std::fs::write(&survey, SURVEY).unwrap();
+    std::fs::write(&survey, &*SURVEY).unwrap();
     let out = dir.join("out");
     // A first run marks the directory as a run's; then a link is planted.
     assert!(run(&survey, &out, &[]).status.success());
@@ -133,7 +110,7 @@ fn a_planted_partial_link_does_not_overwrite_its_target() {
 fn a_rerun_with_other_formats_leaves_no_stale_files() {
     let dir = temp("rerun");
     let survey = dir.join("s.toml");
-    std::fs::write(&survey, SURVEY).unwrap();
+    std::fs::write(&survey, &*SURVEY).unwrap();
     let out = dir.join("out");
     assert!(run(&survey, &out, &[]).status.success());
     assert!(out.join("points.xyz").exists());
@@ -163,7 +140,7 @@ fn a_rerun_with_other_formats_leaves_no_stale_files() {
 fn seeds_beyond_toml_integers_are_refused_and_the_largest_reads_back() {
     let dir = temp("seed");
     let survey = dir.join("s.toml");
-    std::fs::write(&survey, SURVEY).unwrap();
+    std::fs::write(&survey, &*SURVEY).unwrap();
     let out = dir.join("out");
     let o = run(&survey, &out, &["--seed", "9223372036854775808"]);
     let stderr = String::from_utf8_lossy(&o.stderr);

@@ -73,7 +73,8 @@ pub struct PulseMarch {
     lane: Vec<u32>,
     // Per crown open at a level: each sub-ray's optical depth in the cell.
     rows: Vec<f64>,
-    row_crowns: Vec<(u32, f64)>,
+    /// Per row: the crown, its `k` and its top.
+    row_crowns: Vec<(u32, f64, f64)>,
     met: Vec<Met>,
     prims: Vec<u32>,
     fates: Vec<Fate>,
@@ -295,7 +296,7 @@ impl PulseMarch {
                     &mut self.rows[start..],
                     &mut self.level_depth,
                 );
-                self.row_crowns.push((m.prim, k));
+                self.row_crowns.push((m.prim, k, m.z_top));
             }
             for i in 0..n {
                 let tau = self.level_depth[i];
@@ -322,15 +323,10 @@ impl PulseMarch {
                     }
                     pick -= x;
                 }
-                let (prim, k) = self.row_crowns[chosen];
+                let (prim, k, top) = self.row_crowns[chosen];
                 let lane = self.lane[i] as usize;
                 let d = self.dirs[lane];
                 let t_level = dz / d.z;
-                let top = self
-                    .met
-                    .iter()
-                    .find(|m| m.prim == prim)
-                    .map_or(z, |m| m.z_top);
                 let t = (t_level + (reached / tau - 0.5) * self.step[i])
                     .max((top - o.z) / d.z)
                     .max(self.t_start[lane])

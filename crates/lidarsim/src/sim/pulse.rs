@@ -52,6 +52,45 @@ struct Emission {
     to_world: DMat3,
 }
 
+/// The sub-rays of a pulse in emission order: the pattern's, each cell
+/// sampled again replaced by its fine samples.
+struct Rays<'a> {
+    dirs: &'a [DVec3],
+    trace: &'a PulseTrace,
+    /// Which cells are sampled again (empty when none is).
+    refine: &'a [bool],
+    fine: &'a [(DVec3, f64)],
+    fine_dirs: &'a [DVec3],
+    fine_trace: &'a PulseTrace,
+    /// Energy share of a pattern sub-ray.
+    share: f64,
+}
+
+impl Rays<'_> {
+    /// Calls `f` with each sub-ray's direction, energy share, closest hit
+    /// and crown spans.
+    #[inline(always)]
+    fn each(&self, mut f: impl FnMut(&DVec3, f64, Option<Hit>, &[VolumeSpan])) {
+        let mut j = 0;
+        for (i, dir) in self.dirs.iter().enumerate() {
+            if self.refine.get(i).copied().unwrap_or(false) {
+                for _ in 0..FINE_PER_CELL {
+                    let (dir, share) = (&self.fine_dirs[j], self.fine[j].1);
+                    f(
+                        dir,
+                        share,
+                        self.fine_trace.hit(j),
+                        self.fine_trace.spans_of(j),
+                    );
+                    j += 1;
+                }
+            } else {
+                f(dir, self.share, self.trace.hit(i), self.trace.spans_of(i));
+            }
+        }
+    }
+}
+
 impl Simulator<'_> {
     /// Simulates pulse `k` of `line`, appending its points to `out`.
     /// Returns the number of echoes.
@@ -218,20 +257,18 @@ impl Simulator<'_> {
         let t_min = self.survey.scanner.min_range_m;
         let t_max = self.survey.scanner.max_range_m;
         canopy.clear();
-        let mut lane = |dir: &DVec3, hit: Option<Hit>, crowns: &[VolumeSpan]| {
-            canopy.push(*dir, t_min, hit.map_or(t_max, |h| h.t), crowns);
+        let rays = Rays {
+            dirs,
+            trace,
+            refine: if refined { refine } else { &[] },
+            fine,
+            fine_dirs,
+            fine_trace,
+            share,
         };
-        let mut f = 0;
-        for (i, dir) in dirs.iter().enumerate() {
-            if refined && refine[i] {
-                for _ in 0..FINE_PER_CELL {
-                    lane(&fine_dirs[f], fine_trace.hit(f), fine_trace.spans_of(f));
-                    f += 1;
-                }
-            } else {
-                lane(dir, trace.hit(i), trace.spans_of(i));
-            }
-        }
+        rays.each(|dir, _, hit, crowns| {
+            canopy.push(*dir, t_min, hit.map_or(t_max, |h| h.t), crowns);
+        });
         canopy.run(scene, em.origin, &self.canopy, &mut stream(Purpose::Canopy));
         let fates = canopy.fates();
         let mut emit = |lane: usize, dir: &DVec3, share: f64, hit: Option<Hit>| {
@@ -267,19 +304,11 @@ impl Simulator<'_> {
             returns.push(Return { range_m, power });
             sources.push(ReturnSource { prim, normal });
         };
-        let (mut f, mut k) = (0, 0);
-        for (i, dir) in dirs.iter().enumerate() {
-            if refined && refine[i] {
-                for _ in 0..FINE_PER_CELL {
-                    emit(k, &fine_dirs[f], fine[f].1, fine_trace.hit(f));
-                    f += 1;
-                    k += 1;
-                }
-            } else {
-                emit(k, dir, share, trace.hit(i));
-                k += 1;
-            }
-        }
+        let mut k = 0;
+        rays.each(|dir, share, hit, _| {
+            emit(k, dir, share, hit);
+            k += 1;
+        });
     }
 
     /// Stage 5: the points of the pulse's echoes. Georeferencing uses what
