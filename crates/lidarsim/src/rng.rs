@@ -95,6 +95,13 @@ impl Stream {
         mix64(self.key.wrapping_add(self.counter.wrapping_mul(GOLDEN)))
     }
 
+    /// Skips the next `n` numbers: the stream then gives what it would have
+    /// after `n` calls of [`Stream::next_u64`].
+    #[inline]
+    pub fn skip(&mut self, n: u64) {
+        self.counter = self.counter.wrapping_add(n);
+    }
+
     /// Uniform number in `[0, 1)` with 53 random bits.
     #[inline]
     pub fn uniform(&mut self) -> f64 {
@@ -133,6 +140,17 @@ impl TryRng for Stream {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn skip_gives_what_drawing_would() {
+        let mut drawn = Stream::new(9, 1, 2, Purpose::Forest);
+        let mut skipped = drawn.clone();
+        for _ in 0..5 {
+            drawn.next_u64();
+        }
+        skipped.skip(5);
+        assert_eq!(drawn.next_u64(), skipped.next_u64());
+    }
 
     #[test]
     fn same_key_same_numbers_different_key_different_numbers() {

@@ -9,6 +9,7 @@
 use super::tree::{Species, TreeSpec};
 use crate::geometry::DVec3;
 use crate::rng::{Purpose, Stream};
+use rayon::prelude::*;
 
 /// A stand to generate.
 #[derive(Clone, Debug, PartialEq)]
@@ -59,7 +60,13 @@ pub fn inside(poly: &[[f64; 2]], x: f64, y: f64) -> bool {
 /// The trees of a stand; `ground_z(x, y)` gives the height of the ground
 /// at a stem. Fewer trees than asked are returned when the minimum spacing
 /// cannot be kept (the caller can compare with the requested count).
-pub fn generate(spec: &ForestSpec, ground_z: &dyn Fn(f64, f64) -> f64) -> Vec<TreeSpec> {
+///
+/// The stems are placed one after another (each must keep its distance
+/// from those before it); each accepted stem then takes the next
+/// [`DRAWS_PER_TREE`] numbers of the stream for its attributes, which are
+/// worked out afterwards on all threads from the stream's position at that
+/// stem: the same trees as drawing them in turn.
+pub fn generate(spec: &ForestSpec, ground_z: &(dyn Fn(f64, f64) -> f64 + Sync)) -> Vec<TreeSpec> {
     let area = polygon_area(&spec.area);
     let wanted = (area / 10_000.0 * spec.stems_per_ha).round() as usize;
     let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
@@ -69,86 +76,162 @@ pub fn generate(spec: &ForestSpec, ground_z: &dyn Fn(f64, f64) -> f64) -> Vec<Tr
         x1 = x1.max(*x);
         y1 = y1.max(*y);
     }
-    let total_weight: f64 = spec.mix.iter().map(|(_, w)| w).sum();
     let mut rng = Stream::new(spec.seed, 0, 0, Purpose::Forest);
-    // Grid of cells the size of the spacing: neighbours are in the 3×3 block.
-    let cell = spec.min_spacing_m.max(1e-3);
-    let (nx, ny) = (
-        ((x1 - x0) / cell).ceil().max(1.0) as usize,
-        ((y1 - y0) / cell).ceil().max(1.0) as usize,
-    );
-    let use_grid = spec.min_spacing_m > 0.0 && nx.saturating_mul(ny) <= 50_000_000;
-    let mut grid: Vec<Vec<(f64, f64)>> = if use_grid {
-        vec![Vec::new(); nx * ny]
-    } else {
-        Vec::new()
-    };
-    let mut trees = Vec::with_capacity(wanted);
+    let mut grid = SpacingGrid::new(spec.min_spacing_m, [x0, y0, x1, y1]);
+    let mut stems: Vec<[f64; 2]> = Vec::with_capacity(wanted);
+    let mut draws: Vec<Stream> = Vec::with_capacity(wanted);
     let mut attempts = 0usize;
-    while trees.len() < wanted && attempts < 50 * wanted + 1000 {
+    while stems.len() < wanted && attempts < 50 * wanted + 1000 {
         attempts += 1;
         let x = x0 + rng.uniform() * (x1 - x0);
         let y = y0 + rng.uniform() * (y1 - y0);
         if !inside(&spec.area, x, y) {
             continue;
         }
-        if use_grid {
-            let (cx, cy) = (
-                (((x - x0) / cell) as usize).min(nx - 1),
-                (((y - y0) / cell) as usize).min(ny - 1),
-            );
-            let mut clear = true;
-            'near: for gx in cx.saturating_sub(1)..=(cx + 1).min(nx - 1) {
-                for gy in cy.saturating_sub(1)..=(cy + 1).min(ny - 1) {
-                    for (px, py) in &grid[gy * nx + gx] {
-                        if (px - x).hypot(py - y) < spec.min_spacing_m {
-                            clear = false;
-                            break 'near;
-                        }
-                    }
-                }
-            }
-            if !clear {
+        if let Some(grid) = &mut grid {
+            let near = grid.any_near(x, y, |i| {
+                let [px, py] = stems[i as usize];
+                (px - x).hypot(py - y) < spec.min_spacing_m
+            });
+            if near {
                 continue;
             }
-            grid[cy * nx + cx].push((x, y));
+            grid.insert(x, y, stems.len() as u32);
         }
-        // Species by weight.
-        let mut pick = rng.uniform() * total_weight;
-        let mut species = spec.mix[0].0;
-        for (s, w) in &spec.mix {
-            species = *s;
-            if pick < *w {
-                break;
-            }
-            pick -= w;
+        stems.push([x, y]);
+        draws.push(rng.clone());
+        rng.skip(DRAWS_PER_TREE);
+    }
+    drop(grid);
+    stems
+        .into_par_iter()
+        .zip(draws)
+        .map(|([x, y], mut rng)| tree_at(spec, x, y, ground_z(x, y), &mut rng))
+        .collect()
+}
+
+/// Numbers of the stream each tree's attributes take (species, height,
+/// crown ratio, seed).
+const DRAWS_PER_TREE: u64 = 4;
+
+/// The tree whose stem stands at `(x, y, z)`, its attributes drawn from
+/// `rng` ([`DRAWS_PER_TREE`] numbers).
+fn tree_at(spec: &ForestSpec, x: f64, y: f64, z: f64, rng: &mut Stream) -> TreeSpec {
+    // Species by weight.
+    let total_weight: f64 = spec.mix.iter().map(|(_, w)| w).sum();
+    let mut pick = rng.uniform() * total_weight;
+    let mut species = spec.mix[0].0;
+    for (s, w) in &spec.mix {
+        species = *s;
+        if pick < *w {
+            break;
         }
-        let (h0, h1) = spec.height_range_m;
-        let height = h0 + rng.uniform() * (h1 - h0);
-        let preset = species.preset();
-        // Heights beyond what the height curve gives over its dbh range
-        // take the nearest end of that range.
-        let (d_lo, d_hi) = Species::DBH_RANGE_M;
-        let dbh = species.dbh_from_height_m(height).unwrap_or(
-            if height < species.height_from_dbh_m(d_lo) {
+        pick -= w;
+    }
+    let (h0, h1) = spec.height_range_m;
+    let height = h0 + rng.uniform() * (h1 - h0);
+    let preset = species.preset();
+    // Heights beyond what the height curve gives over its dbh range take
+    // the nearest end of that range.
+    let (d_lo, d_hi) = Species::DBH_RANGE_M;
+    let dbh =
+        species
+            .dbh_from_height_m(height)
+            .unwrap_or(if height < species.height_from_dbh_m(d_lo) {
                 d_lo
             } else {
                 d_hi
-            },
-        );
-        let ratio = preset.crown_ratio * (0.85 + 0.3 * rng.uniform());
-        let crown_base = height * (1.0 - ratio.min(0.95));
-        let mut tree = TreeSpec::new(
-            DVec3::new(x, y, ground_z(x, y)),
-            species,
-            dbh,
-            height,
-            crown_base,
-        );
-        tree.seed = rng.next_u64();
-        trees.push(tree);
+            });
+    let ratio = preset.crown_ratio * (0.85 + 0.3 * rng.uniform());
+    let crown_base = height * (1.0 - ratio.min(0.95));
+    let mut tree = TreeSpec::new(DVec3::new(x, y, z), species, dbh, height, crown_base);
+    tree.seed = rng.next_u64();
+    tree
+}
+
+/// The stems placed so far, by cells whose diagonal is the minimum spacing:
+/// a cell holds at most one stem, and every stem closer than the spacing to
+/// a point lies in the 5 × 5 cells around it.
+struct SpacingGrid {
+    origin: [f64; 2],
+    inv_cell: f64,
+    nx: usize,
+    ny: usize,
+    cells: Cells,
+}
+
+/// A flat array of cells where that takes at most [`SpacingGrid::FLAT_MAX`]
+/// cells, a map of the occupied ones otherwise.
+enum Cells {
+    Flat(Vec<u32>),
+    Sparse(std::collections::HashMap<usize, u32>),
+}
+
+impl SpacingGrid {
+    /// Largest flat grid: 64 M cells, 256 MB.
+    const FLAT_MAX: usize = 1 << 26;
+    const EMPTY: u32 = u32::MAX;
+
+    /// The grid over the box `[x0, y0, x1, y1]`, `None` without a spacing.
+    fn new(spacing_m: f64, [x0, y0, x1, y1]: [f64; 4]) -> Option<Self> {
+        if spacing_m.is_nan() || spacing_m <= 0.0 {
+            return None;
+        }
+        let cell = spacing_m / std::f64::consts::SQRT_2;
+        // One cell more than the box needs: a stem rounded onto the far
+        // edge still has a cell of its own.
+        let nx = ((x1 - x0) / cell).ceil().clamp(0.0, 1e15) as usize + 1;
+        let ny = ((y1 - y0) / cell).ceil().clamp(0.0, 1e15) as usize + 1;
+        let cells = match nx.checked_mul(ny) {
+            Some(n) if n <= Self::FLAT_MAX => Cells::Flat(vec![Self::EMPTY; n]),
+            _ => Cells::Sparse(Default::default()),
+        };
+        Some(Self {
+            origin: [x0, y0],
+            inv_cell: 1.0 / cell,
+            nx,
+            ny,
+            cells,
+        })
     }
-    trees
+
+    fn cell_of(&self, x: f64, y: f64) -> (usize, usize) {
+        let cx = ((x - self.origin[0]) * self.inv_cell) as usize;
+        let cy = ((y - self.origin[1]) * self.inv_cell) as usize;
+        (cx.min(self.nx - 1), cy.min(self.ny - 1))
+    }
+
+    /// Whether `hit` holds for a stem in the 5 × 5 cells around `(x, y)`.
+    fn any_near(&self, x: f64, y: f64, mut hit: impl FnMut(u32) -> bool) -> bool {
+        let (cx, cy) = self.cell_of(x, y);
+        let (gx0, gx1) = (cx.saturating_sub(2), (cx + 2).min(self.nx - 1));
+        for gy in cy.saturating_sub(2)..=(cy + 2).min(self.ny - 1) {
+            let row = gy * self.nx;
+            let found = match &self.cells {
+                Cells::Flat(v) => v[row + gx0..=row + gx1]
+                    .iter()
+                    .any(|&i| i != Self::EMPTY && hit(i)),
+                Cells::Sparse(m) => {
+                    (gx0..=gx1).any(|gx| m.get(&(row + gx)).is_some_and(|&i| hit(i)))
+                }
+            };
+            if found {
+                return true;
+            }
+        }
+        false
+    }
+
+    fn insert(&mut self, x: f64, y: f64, stem: u32) {
+        let (cx, cy) = self.cell_of(x, y);
+        let cell = cy * self.nx + cx;
+        match &mut self.cells {
+            Cells::Flat(v) => v[cell] = stem,
+            Cells::Sparse(m) => {
+                m.insert(cell, stem);
+            }
+        }
+    }
 }
 
 #[cfg(test)]
@@ -196,6 +279,38 @@ mod tests {
             assert!((0.03..=0.8).contains(&t.dbh_m), "{t:?}");
             assert!(t.crown_radius_m <= t.species.crown_radius_m(0.8), "{t:?}");
         }
+    }
+
+    /// The flat and the sparse grid find the same stems near a point: all
+    /// those closer than the spacing (brute force), perhaps a few more.
+    #[test]
+    fn spacing_grid_finds_every_close_stem() {
+        let spacing = 2.0;
+        let mut flat = SpacingGrid::new(spacing, [0.0, 0.0, 40.0, 30.0]).unwrap();
+        let mut sparse = SpacingGrid::new(spacing, [0.0, 0.0, 40.0, 30.0]).unwrap();
+        sparse.cells = Cells::Sparse(Default::default());
+        let mut rng = Stream::new(1, 0, 0, Purpose::Forest);
+        let mut stems: Vec<[f64; 2]> = Vec::new();
+        for _ in 0..3000 {
+            let (x, y) = (40.0 * rng.uniform(), 30.0 * rng.uniform());
+            let close = |grid: &SpacingGrid| {
+                grid.any_near(x, y, |i| {
+                    let [px, py] = stems[i as usize];
+                    (px - x).hypot(py - y) < spacing
+                })
+            };
+            let brute = stems
+                .iter()
+                .any(|[px, py]| (px - x).hypot(py - y) < spacing);
+            assert_eq!(close(&flat), brute);
+            assert_eq!(close(&sparse), brute);
+            if !brute {
+                flat.insert(x, y, stems.len() as u32);
+                sparse.insert(x, y, stems.len() as u32);
+                stems.push([x, y]);
+            }
+        }
+        assert!(stems.len() > 100);
     }
 
     #[test]

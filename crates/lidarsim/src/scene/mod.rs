@@ -280,16 +280,8 @@ impl Scene {
     pub fn add_tree(&mut self, tree: &TreeSpec, whorl_spacing_m: f64, name: impl Into<String>) {
         let object = self.add_object(name);
         let species = tree.species.name();
-        let bark = self.add_material(Material {
-            name: format!("{species} bark"),
-            reflectance: tree.bark_reflectance,
-            incidence_exponent: 1.0,
-        });
-        let foliage = self.add_material(Material {
-            name: format!("{species} foliage"),
-            reflectance: tree.foliage_reflectance,
-            incidence_exponent: 0.0,
-        });
+        let bark = self.add_named_material(species, " bark", tree.bark_reflectance, 1.0);
+        let foliage = self.add_named_material(species, " foliage", tree.foliage_reflectance, 0.0);
         self.primitives.push(Primitive {
             shape: Shape::Trunk(tree.trunk()),
             material: bark,
@@ -302,6 +294,33 @@ impl Scene {
             class: SurfaceClass::Vegetation,
             object,
         });
+    }
+
+    /// [`Scene::add_material`] for the material named `prefix` + `suffix`,
+    /// without building the name when the material is there already (a
+    /// stand adds the same few materials for every tree).
+    fn add_named_material(
+        &mut self,
+        prefix: &str,
+        suffix: &str,
+        reflectance: f64,
+        incidence_exponent: f64,
+    ) -> MaterialId {
+        let same = |m: &Material| {
+            m.reflectance == reflectance
+                && m.incidence_exponent == incidence_exponent
+                && m.name.len() == prefix.len() + suffix.len()
+                && m.name.starts_with(prefix)
+                && m.name.ends_with(suffix)
+        };
+        match self.materials.iter().position(same) {
+            Some(i) => i as MaterialId,
+            None => self.add_material(Material {
+                name: format!("{prefix}{suffix}"),
+                reflectance,
+                incidence_exponent,
+            }),
+        }
     }
 
     /// Adds an object record and returns its id.

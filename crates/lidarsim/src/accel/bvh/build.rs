@@ -8,8 +8,13 @@ use super::{BINS, Bvh, MAX_LEAF, Node, PARALLEL_DEPTH, PARALLEL_MIN, WIDTH, Wide
 use crate::geometry::{Aabb, DVec3};
 use crate::scene::Scene;
 
+/// A primitive's box and its number in the scene. The build partitions
+/// these themselves, not indices into them: each pass then reads memory in
+/// order (the swaps are the ones an index partition would make, so the tree
+/// is the same).
 struct BuildPrim {
     bounds: Aabb,
+    index: u32,
 }
 
 impl BuildPrim {
@@ -26,10 +31,14 @@ impl Bvh {
     pub fn build(scene: Scene) -> Self {
         // The primitives' boxes on all threads; the scene's box from them
         // ([`Scene::bounds`], the same unions in the same order).
-        let prims: Vec<BuildPrim> = scene
+        let mut prims: Vec<BuildPrim> = scene
             .primitives
             .par_iter()
-            .map(|p| BuildPrim { bounds: p.bounds() })
+            .enumerate()
+            .map(|(i, p)| BuildPrim {
+                bounds: p.bounds(),
+                index: i as u32,
+            })
             .collect();
         let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
         let origin = if bounds.is_empty() {
@@ -45,7 +54,6 @@ impl Bvh {
         // f32 rounding of box corners and of ray origins far from the scene
         // origin: 1 mm plus a relative margin covers ranges up to ~100 km.
         let pad = 1e-3 + 1e-6 * size;
-        let mut order: Vec<u32> = (0..prims.len() as u32).collect();
         let mut bvh = Self {
             scene: Scene::default(),
             nodes: Vec::new(),
@@ -60,10 +68,11 @@ impl Bvh {
         let mut nodes = zeroed_nodes((2 * prims.len()).saturating_sub(1));
         let mut used = 0;
         if let Some((root, desc)) = nodes.split_first_mut() {
-            let (r, n) = bvh.subtree(&prims, &mut order, 0, 0, desc, 1);
+            let (r, n) = bvh.subtree(&mut prims, 0, 0, desc, 1);
             *root = r;
             used = 1 + n;
         }
+        let order: Vec<u32> = prims.iter().map(|p| p.index).collect();
         drop(prims);
         let (wide, depth) = collapse(&nodes, used);
         drop(nodes);
@@ -75,20 +84,11 @@ impl Bvh {
         bvh
     }
 
-    /// The box node over `order[at..at + count]`, a leaf whose first
-    /// primitive is at `first + at` in the whole order.
-    fn leaf_node(
-        &self,
-        prims: &[BuildPrim],
-        order: &[u32],
-        at: usize,
-        count: usize,
-        first: usize,
-    ) -> Node {
-        let b = order[at..at + count]
-            .iter()
-            .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds));
-        self.node_over(b, at, count, first)
+    /// The leaf node over all of `prims`, whose first primitive is at
+    /// `first` in the whole order.
+    fn leaf_node(&self, prims: &[BuildPrim], first: usize) -> Node {
+        let b = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
+        self.node_over(b, 0, prims.len(), first)
     }
 
     /// The leaf node with box `b` over `count` primitives from `first + at`
@@ -104,8 +104,8 @@ impl Bvh {
         }
     }
 
-    /// Builds the subtree over `order` (whose first element is at `first`
-    /// in the whole order). Returns its root and how many nodes it used in
+    /// Builds the subtree over `prims` (whose first element is at `first`
+    /// in the whole order), reordering them. Returns its root and how many nodes it used in
     /// `desc`, which receives its other nodes (room for `2·len − 2`; its
     /// first element is node `base` of the whole array, child indices
     /// count from the start of that array). The two halves of the top
@@ -113,31 +113,30 @@ impl Bvh {
     /// tree is the same as a sequential build's.
     fn subtree(
         &self,
-        prims: &[BuildPrim],
-        order: &mut [u32],
+        prims: &mut [BuildPrim],
         first: usize,
         depth: usize,
         desc: &mut [Node],
         base: usize,
     ) -> (Node, usize) {
-        let count = order.len();
-        let mut root = self.leaf_node(prims, order, 0, count, first);
+        let count = prims.len();
+        let mut root = self.leaf_node(prims, first);
         if depth >= PARALLEL_DEPTH || count < PARALLEL_MIN {
-            let used = self.sequential(prims, order, first, &mut root, desc, base);
+            let used = self.sequential(prims, first, &mut root, desc, base);
             return (root, used);
         }
-        let Some((mid, _)) = split(prims, order) else {
+        let Some((mid, _)) = split(prims) else {
             return (root, 0);
         };
-        let (lo, hi) = order.split_at_mut(mid);
+        let (lo, hi) = prims.split_at_mut(mid);
         // Layout: the two children, then room for the left's descendants,
         // then for the right's.
         let (pair, rest) = desc.split_at_mut(2);
         let (ldesc, rdesc) = rest.split_at_mut(2 * mid - 2);
         let (lbase, rbase) = (base + 2, base + 2 + ldesc.len());
         let ((lroot, lused), (rroot, rused)) = rayon::join(
-            || self.subtree(prims, lo, first, depth + 1, ldesc, lbase),
-            || self.subtree(prims, hi, first + mid, depth + 1, rdesc, rbase),
+            || self.subtree(lo, first, depth + 1, ldesc, lbase),
+            || self.subtree(hi, first + mid, depth + 1, rdesc, rbase),
         );
         pair[0] = lroot;
         pair[1] = rroot;
@@ -147,12 +146,11 @@ impl Bvh {
     }
 
     /// Sequential binned-SAH build below `root` (a leaf over all of
-    /// `order`, which may become interior); descendants go to the front of
+    /// `prims`, which may become interior); descendants go to the front of
     /// `desc` (node `base` of the whole array). Returns how many.
     fn sequential(
         &self,
-        prims: &[BuildPrim],
-        order: &mut [u32],
+        prims: &mut [BuildPrim],
         first: usize,
         root: &mut Node,
         desc: &mut [Node],
@@ -168,7 +166,7 @@ impl Bvh {
             };
             let at = node.left_or_first as usize - first;
             let count = node.count as usize;
-            if let Some((mid, halves)) = split(prims, &mut order[at..at + count]) {
+            if let Some((mid, halves)) = split(&mut prims[at..at + count]) {
                 let left = used;
                 let (l, r) = halves;
                 desc[left] = self.node_over(l, at, mid, first);
@@ -321,15 +319,14 @@ pub(super) fn up(x: f64) -> f32 {
 /// left part and the bounds of the two parts (from the bins: the union of
 /// their bins' boxes is the union of their primitives'), or `None` when the
 /// node should stay a leaf.
-fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<(usize, (Aabb, Aabb))> {
+fn split(items: &mut [BuildPrim]) -> Option<(usize, (Aabb, Aabb))> {
     let n = items.len();
     if n <= MAX_LEAF {
         return None;
     }
     // One pass for the bounds of the centroids and of the node, one for
     // the bins of all three axes.
-    let (cb, nb) = items.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(c, b), &i| {
-        let p = &prims[i as usize];
+    let (cb, nb) = items.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(c, b), p| {
         (c.union_point(p.centroid()), b.union(p.bounds))
     });
     let node_area = nb.surface_area();
@@ -343,8 +340,7 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<(usize, (Aabb, Aabb))
     });
     let mut boxes = [[Aabb::EMPTY; BINS]; 3];
     let mut counts = [[0usize; BINS]; 3];
-    for &i in items.iter() {
-        let p = &prims[i as usize];
+    for p in items.iter() {
         let c = p.centroid();
         for axis in 0..3 {
             let b = (((c[axis] - cb.min[axis]) * scale[axis]) as usize).min(BINS - 1);
@@ -390,8 +386,8 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<(usize, (Aabb, Aabb))
                 return None;
             }
             let scale = scale[axis];
-            let goes_left = |i: &u32| {
-                let c = prims[*i as usize].centroid()[axis];
+            let goes_left = |p: &BuildPrim| {
+                let c = p.centroid()[axis];
                 ((((c - cb.min[axis]) * scale) as usize).min(BINS - 1)) <= bin
             };
             let mid = partition(items, goes_left);
@@ -405,16 +401,14 @@ fn split(prims: &[BuildPrim], items: &mut [u32]) -> Option<(usize, (Aabb, Aabb))
         // All centroids coincide: split the list in halves so that leaves
         // stay small.
         None => {
-            let bounds = |part: &[u32]| {
-                part.iter()
-                    .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds))
-            };
+            let bounds =
+                |part: &[BuildPrim]| part.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
             Some((n / 2, (bounds(&items[..n / 2]), bounds(&items[n / 2..]))))
         }
     }
 }
 
-fn partition(items: &mut [u32], pred: impl Fn(&u32) -> bool) -> usize {
+fn partition(items: &mut [BuildPrim], pred: impl Fn(&BuildPrim) -> bool) -> usize {
     let mut i = 0;
     for j in 0..items.len() {
         if pred(&items[j]) {
