@@ -47,6 +47,21 @@ fn check(survey: &Survey, world: &World, output: &Path) {
         world.scene().primitives.len(),
         survey.seed
     );
+    if let Some(u) = &survey.preset {
+        let pr = u.preset;
+        say!("instrument:           {} (preset {})", pr.name, pr.id);
+        say!("  source:             {}", pr.source);
+        if !pr.note.is_empty() {
+            say!("  not modelled:       {}", pr.note);
+        }
+        say!(
+            "  deflector:          {}",
+            survey.scanner.deflector.describe()
+        );
+        for k in &u.set {
+            say!("  set by the preset:  scanner.{k}");
+        }
+    }
     say!("pulses:               {}", p.pulses);
     say!("flight time:          {:.1} s", p.flight_time_s);
     say!("swath width:          {:.1} m", p.swath_width_m);

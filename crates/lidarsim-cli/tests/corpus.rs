@@ -103,7 +103,7 @@ fn broken_surveys() {
             &[
                 "unknown_keys.toml:2:1",
                 "`scanner.prf_hertz`: unknown field `prf_hertz`",
-                "valid keys here: prf_hz,",
+                "valid keys here: preset, prf_hz,",
                 "unknown_keys.toml:4:2",
                 "did you mean `platform`?",
                 "unknown_keys.toml:11:1",

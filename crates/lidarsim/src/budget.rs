@@ -146,7 +146,7 @@ fn share_over_scene(survey: &Survey, line: &crate::sensor::platform::FlightLine,
             let t = line.duration_s() * (f64::from(k) + 0.5) / f64::from(samples);
             let p = line.pose_at(t).position_m;
             let h = (p.z - b.min.z).max(0.0).min(s.max_range_m);
-            let reach = h * (s.mirror.scan_half_angle_rad + 0.5 * s.divergence_rad).tan() + 1.0;
+            let reach = h * (s.deflector.max_off_nadir_rad() + 0.5 * s.divergence_rad).tan() + 1.0;
             p.x + reach >= b.min.x
                 && p.x - reach <= b.max.x
                 && p.y + reach >= b.min.y
@@ -166,9 +166,12 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
     let extra = EXTRA_RETURNS_UNDER_CROWNS.min(survey.detector.max_returns as f64 - 1.0);
     let per_pulse = 1.0 + cover * extra;
     let b = scene.bounds();
+    // Pulse slots in which a pulse leaves (a polygon's facets look
+    // outside the field of view for part of each turn).
+    let fired = survey.scanner.deflector.emitted_share();
     let over: f64 = lines
         .iter()
-        .map(|l| survey.pulses_of(l) as f64 * share_over_scene(survey, l, b))
+        .map(|l| survey.pulses_of(l) as f64 * fired * share_over_scene(survey, l, b))
         .sum();
     let points = (over * per_pulse).ceil() as u64;
     // The largest coordinate written, for the text formats.

@@ -3,10 +3,13 @@
 //! Textbook ALS planning formulas (e.g. Baltsavias 1999, "Airborne laser
 //! scanning: basic relations and formulas", ISPRS J. 54): over level ground
 //! at height `H` below the sensor, the swath is `W = 2·H·tan θ` for scan
-//! half-angle θ, the mean point density of one line is `PRF / (v·W)`, the
-//! distance between scan lines along track is `v / (2·f_scan)` for an
-//! oscillating mirror (two scan lines per mirror cycle), and the footprint
-//! diameter at nadir is `H·γ` for full divergence γ.
+//! half-angle θ across the track, the mean point density of one line is
+//! `PRF·s / (v·W)` (`s` the share of pulse slots that fire: less than 1
+//! for a polygon mirror), the distance between scan lines along track is
+//! `v / n_lines` (`n_lines` scan lines per second: `2·f_scan` for an
+//! oscillating mirror, one per facet for a polygon,
+//! [`crate::sensor::deflector::Deflector::lines_per_s`]), and the
+//! footprint diameter at nadir is `H·γ` for full divergence γ.
 
 use serde::Serialize;
 
@@ -84,15 +87,10 @@ pub fn plan(survey: &Survey, world: &World) -> Plan {
     for line in &world.lines {
         let mid = (line.start_m + line.end_m) * 0.5;
         let h = (mid.z - crate::accel::ground_below(caster, mid)).max(0.0);
-        let w = 2.0 * h * s.mirror.scan_half_angle_rad.tan();
+        let w = 2.0 * h * s.deflector.across_half_angle_rad().tan();
         let pulses = survey.pulses_of(line);
-        // Angular step between pulses at nadir for a triangle mirror is
-        // 4 θ f / PRF; for a sine mirror it is 2π θ f / PRF.
-        let omega = match s.mirror.profile {
-            crate::sensor::scanner::MirrorProfile::Triangle => 4.0,
-            crate::sensor::scanner::MirrorProfile::Sine => std::f64::consts::TAU,
-        } * s.mirror.scan_half_angle_rad
-            * s.mirror.scan_frequency_hz;
+        let step_rad = s.deflector.pulse_step_rad(s.prf_hz);
+        let prf = s.prf_hz * s.deflector.emitted_share();
         lines.push(LinePlan {
             line: line.index + 1,
             pulses,
@@ -100,13 +98,13 @@ pub fn plan(survey: &Survey, world: &World) -> Plan {
             height_above_ground_m: h,
             swath_width_m: w,
             point_density_per_m2: if w > 0.0 {
-                s.prf_hz / (line.speed_mps * w)
+                prf / (line.speed_mps * w)
             } else {
                 0.0
             },
             footprint_diameter_m: h * s.divergence_rad,
-            scan_line_spacing_m: line.speed_mps / (2.0 * s.mirror.scan_frequency_hz),
-            across_track_spacing_m: h * omega / s.prf_hz,
+            scan_line_spacing_m: line.speed_mps / s.deflector.lines_per_s(),
+            across_track_spacing_m: h * step_rad,
         });
     }
     let pulses: u64 = lines.iter().map(|l| l.pulses).sum();
@@ -146,7 +144,7 @@ pub fn plan(survey: &Survey, world: &World) -> Plan {
 pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
     let caster = world.index();
     let s = &survey.scanner;
-    let theta = s.mirror.scan_half_angle_rad;
+    let theta = s.deflector.max_off_nadir_rad();
     let mut out = Vec::new();
     let mut farthest: Option<(f64, u32)> = None;
     let scene = caster.scene().bounds();

@@ -22,14 +22,6 @@ fn pulse_words(p: &crate::waveform::PulseShape) -> String {
     format!("{name}, {} ns FWHM", fixed(p.fwhm_s() * 1e9, 1))
 }
 
-/// The mirror's motion in words.
-fn mirror_words(m: &crate::sensor::scanner::MirrorProfile) -> &'static str {
-    match m {
-        crate::sensor::scanner::MirrorProfile::Triangle => "triangle (constant angular speed)",
-        crate::sensor::scanner::MirrorProfile::Sine => "sine",
-    }
-}
-
 /// "1st", "2nd", "3rd", "4th", …
 fn ordinal(n: usize) -> String {
     let suffix = match (n % 10, n % 100) {
@@ -84,7 +76,7 @@ fn survey_section(h: &mut String, survey: &Survey, lines: &[FlightLine], summary
          <tr><th>source</th><td>{}</td></tr>\
          <tr><th>seed</th><td>{}</td></tr>\
          <tr><th>PRF</th><td>{} Hz</td></tr>\
-         <tr><th>mirror</th><td>{}, {} Hz, ±{:.2}°</td></tr>\
+         <tr><th>deflector</th><td>{}</td></tr>\
          <tr><th>beam</th><td>{:.3} mrad, {} sub-rays</td></tr>\
          <tr><th>pulse</th><td>{}</td></tr>\
          <tr><th>flight lines</th><td>{}</td></tr>\
@@ -95,9 +87,7 @@ fn survey_section(h: &mut String, survey: &Survey, lines: &[FlightLine], summary
             .map_or_else(|| "built-in demo".to_string(), |p| p.display().to_string())),
         summary.seed,
         s.prf_hz,
-        mirror_words(&s.mirror.profile),
-        s.mirror.scan_frequency_hz,
-        s.mirror.scan_half_angle_rad.to_degrees(),
+        esc(&s.deflector.describe()),
         s.divergence_rad * 1e3,
         s.subrays,
         pulse_words(&survey.receiver.pulse),

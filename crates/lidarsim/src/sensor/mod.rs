@@ -1,12 +1,12 @@
 //! The sensor: where it is and where it points. A flight line's pose as a
 //! function of time ([`platform`]), what the GNSS/IMU makes of it
-//! ([`navigation`]), the mirror that deflects the beam ([`scanner`]) and
-//! the beam's sub-rays ([`beam`]).
+//! ([`navigation`]), what deflects the beam ([`deflector`]) and the beam's
+//! sub-rays ([`beam`]).
 
 pub mod beam;
+pub mod deflector;
 pub mod navigation;
 pub mod platform;
-pub mod scanner;
 
 use crate::geometry::{Attitude, DVec3};
 

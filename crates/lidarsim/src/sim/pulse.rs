@@ -26,10 +26,9 @@ use crate::radiometry::surface_return;
 use crate::rng::{Purpose, Stream};
 use crate::scene::{Shape, SurfaceClass};
 use crate::sensor::Pose;
-use crate::sensor::beam::{BeamPattern, FINE_PER_CELL, deflection};
+use crate::sensor::beam::{BeamPattern, FINE_PER_CELL};
 use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
-use crate::sensor::scanner::Mirror;
 use crate::waveform::Return;
 
 /// Where, when and in which direction a pulse leaves the scanner.
@@ -40,8 +39,6 @@ struct Emission {
     t: f64,
     /// The true pose of the platform.
     pose: Pose,
-    /// Mirror angle, rad.
-    theta: f64,
     /// Body-to-world rotation of the true attitude.
     body: DMat3,
     /// The scanner's position: the pose's plus the lever arm.
@@ -103,7 +100,11 @@ impl Simulator<'_> {
     ) -> usize {
         let seed = self.survey.seed;
         let stream = |purpose| Stream::new(seed, line.index, k, purpose);
-        let em = self.emit(line, k, scratch);
+        let Some(em) = self.emit(line, k, scratch) else {
+            scratch.waveform.samples.clear();
+            scratch.echoes.clear();
+            return 0;
+        };
         let pattern = self.beam.for_pulse(|| stream(Purpose::Beam));
         let refined = self.cast(&em, pattern, scratch);
         self.gather_returns(&em, pattern, refined, scratch, &stream);
@@ -125,29 +126,32 @@ impl Simulator<'_> {
 
     /// Stage 1: the true pose casts the rays; the scanner sits at the
     /// lever arm from the IMU and is turned by the boresight misalignment.
+    /// `None` when no pulse leaves at this tick (a polygon facet looking
+    /// outside the field of view).
     #[inline(always)]
-    fn emit(&self, line: &FlightLine, k: u64, scratch: &mut Scratch) -> Emission {
+    fn emit(&self, line: &FlightLine, k: u64, scratch: &mut Scratch) -> Option<Emission> {
         let s = self.survey;
         let t_line = k as f64 / s.scanner.prf_hz;
         let t = line.start_time_s + t_line;
+        let deflector = &s.scanner.deflector;
+        if !deflector.emits_at(t) {
+            return None;
+        }
         let frame = scratch.frames.line(line);
         let pose = line.pose_in(&frame, t_line);
-        let theta = s.scanner.mirror.angle_at(t);
         let (body, rot) = scratch.frames.rotations(&pose.attitude, self.boresight);
         let origin = pose.position_m + body * s.navigation.lever_arm_m;
-        // The deflection's third column is the beam direction
-        // (`Mirror::beam_direction`), from the same sine and cosine.
-        let deflection = deflection(theta);
-        Emission {
+        // The deflection's third column is the beam direction.
+        let deflection = deflector.beam_frame(t);
+        Some(Emission {
             t_line,
             t,
             pose,
-            theta,
             body,
             origin,
             central: rot * deflection.z_axis,
             to_world: rot * deflection,
-        }
+        })
     }
 
     /// Stage 2: the sub-rays of `pattern`, in the world frame, cast as one
@@ -327,8 +331,8 @@ impl Simulator<'_> {
     ) -> usize {
         let s = self.survey;
         let nav = &s.navigation;
-        let mirror = &s.scanner.mirror;
-        let (t, theta, origin, body, central) = (em.t, em.theta, em.origin, em.body, em.central);
+        let deflector = &s.scanner.deflector;
+        let (t, origin, body, central) = (em.t, em.origin, em.body, em.central);
         let mut measure: Option<Stream> = None;
         let (obs_origin, obs_body, obs_central) = if self.exact_georeferencing {
             (origin, body, central)
@@ -340,14 +344,14 @@ impl Simulator<'_> {
                 em.t_line,
                 Some(measure.get_or_insert_with(|| stream(Purpose::Measurement))),
             );
-            let theta_obs = if nav.encoder_sigma_rad > 0.0 {
-                theta
-                    + nav.encoder_sigma_rad
-                        * measure
-                            .get_or_insert_with(|| stream(Purpose::Measurement))
-                            .normal()
+            let beam_obs = if nav.encoder_sigma_rad > 0.0 {
+                let error = nav.encoder_sigma_rad
+                    * measure
+                        .get_or_insert_with(|| stream(Purpose::Measurement))
+                        .normal();
+                deflector.observed_direction(t, error)
             } else {
-                theta
+                deflector.direction_at(t)
             };
             // Without attitude errors the observed rotation is the true one,
             // to the bit: no need to compute it again.
@@ -360,18 +364,18 @@ impl Simulator<'_> {
                 obs.attitude.body_to_world()
             };
             // `Attitude::scanner_to_world` from that rotation.
-            let dir = obs_body * SCANNER_TO_LEVEL_NORTH * Mirror::beam_direction(theta_obs);
+            let dir = obs_body * SCANNER_TO_LEVEL_NORTH * beam_obs;
             (obs.position_m, obs_body, dir)
         };
         // Attributes shared by the pulse's points.
         let right = obs_body * DVec3::X;
         let right_h = DVec3::new(right.x, right.y, 0.0).normalize_or_zero();
         let scan_angle_deg = obs_central.dot(right_h).atan2(-obs_central.z).to_degrees();
-        let moving_left = mirror.moving_left_at(t);
+        let scan_direction_positive = deflector.scan_direction_positive(t);
         // The next pulse's time from its own tick, exactly as it will be
         // computed for that pulse, so that the two agree on the direction.
         let t_next = line.start_time_s + (k + 1) as f64 / s.scanner.prf_hz;
-        let edge = moving_left != mirror.moving_left_at(t_next);
+        let edge = deflector.line_ends_between(t, t_next);
         let bin_s = s.receiver.bin_s;
         let scene = self.caster.scene();
         let n = scratch.echoes.len();
@@ -440,7 +444,7 @@ impl Simulator<'_> {
                 error_m: position - truth,
                 return_number: (i + 1) as u8,
                 number_of_returns: n as u8,
-                scan_direction_positive: !moving_left,
+                scan_direction_positive,
                 edge_of_flight_line: edge,
                 scan_angle_deg,
                 classification,

@@ -11,6 +11,7 @@
 mod check;
 mod diagnostic;
 mod locate;
+pub mod preset;
 pub mod raw;
 mod read;
 pub mod spec;
@@ -28,9 +29,9 @@ use crate::detection::DetectorConfig;
 use crate::geometry::DVec3;
 pub use crate::message::num;
 use crate::scene::Material;
+use crate::sensor::deflector::Deflector;
 use crate::sensor::navigation::NavigationErrors;
 use crate::sensor::platform::{FlightLine, SwayConfig};
-use crate::sensor::scanner::Mirror;
 use crate::waveform::ReceiverConfig;
 use check::Checker;
 use diagnostic::{Diagnose, diagnostics_in_file_order};
@@ -94,8 +95,8 @@ pub const MIN_TREE_HEIGHT_M: f64 = 2.0;
 pub struct ScannerSettings {
     /// Pulse repetition frequency, Hz.
     pub prf_hz: f64,
-    /// The oscillating mirror.
-    pub mirror: Mirror,
+    /// What deflects the beam.
+    pub deflector: Deflector,
     /// Full beam divergence, rad.
     pub divergence_rad: f64,
     /// Sub-rays per pulse.
@@ -179,6 +180,8 @@ pub struct Survey {
     /// Things that are allowed but probably not what was meant, each
     /// naming its key (printed by the command line, kept in the summary).
     pub warnings: Vec<String>,
+    /// The instrument preset `[scanner] preset` named, and what it set.
+    pub preset: Option<preset::PresetUse>,
     /// What to write.
     pub output: OutputSettings,
     /// The survey's materials by name.
@@ -310,11 +313,11 @@ impl Survey {
             forests: check::vegetation::forests(&mut c, &raw, seed),
             whorl_spacing_m,
         };
-        let mut warnings = Vec::new();
+        let mut warnings = sensor.warnings;
         let line_spec = check::lines::lines(
             &mut c,
             &raw,
-            sensor.scanner.mirror.scan_half_angle_rad,
+            sensor.scanner.deflector.across_half_angle_rad(),
             &base,
             &mut warnings,
         );
@@ -335,6 +338,7 @@ impl Survey {
             canopy,
             navigation,
             warnings,
+            preset: sensor.preset,
             output,
             materials: materials.0,
             scene_spec,

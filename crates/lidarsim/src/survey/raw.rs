@@ -81,10 +81,26 @@ pub struct RawSurvey {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct RawScanner {
+    /// An instrument whose datasheet values fill the keys not given
+    /// (`survey::preset`).
+    pub preset: Option<String>,
     pub prf_hz: Option<f64>,
     pub scan_frequency_hz: Option<f64>,
     pub scan_angle_deg: Option<f64>,
+    /// `"oscillating"` (default), `"polygon"`, `"palmer"`, `"risley"`,
+    /// `"fibre"`.
+    pub deflector: Option<String>,
     pub mirror: Option<String>,
+    /// Polygon: mirror facets.
+    pub facets: Option<i64>,
+    /// Palmer: half-angle of the cone along the track (default: as across).
+    pub scan_angle_along_deg: Option<f64>,
+    /// Risley: deviation of each prism, degrees.
+    pub prism_deviation_deg: Option<Vec<f64>>,
+    /// Risley: turns per second of each prism (negative: the other way).
+    pub rotor_frequency_hz: Option<Vec<f64>>,
+    /// Fibre array: fibres in the fan.
+    pub fibres: Option<i64>,
     pub divergence_mrad: Option<f64>,
     pub subrays: Option<i64>,
     pub pulse_fwhm_ns: Option<f64>,

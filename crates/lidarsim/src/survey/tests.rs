@@ -59,7 +59,10 @@ fn problems_name_line_and_key() {
     assert_eq!((d[0].column, d[0].width), (1, 7));
     let far = diagnostics(&format!("[scanner]\nbananas = 3\n{MINIMAL}"));
     let help = far[0].help.as_deref().unwrap();
-    assert!(help.starts_with("valid keys here: prf_hz, "), "{help}");
+    assert!(
+        help.starts_with("valid keys here: preset, prf_hz, "),
+        "{help}"
+    );
     assert_eq!(edit_distance("scan_angel_deg", "scan_angle_deg"), 2);
     assert!(d[0].key.contains("scanner"), "{}", d[0].key);
 

@@ -1,10 +1,11 @@
-//! `[scanner]` and `[receiver]`: the laser, the mirror, the beam, the
+//! `[scanner]` and `[receiver]`: the laser, the deflector, the beam, the
 //! waveform's sampling and noise, and echo detection.
 
 use super::Checker;
 use crate::detection::{DetectorConfig, ReturnSelection};
-use crate::message::num;
-use crate::sensor::scanner::{Mirror, MirrorProfile};
+use crate::message::{edit_distance, num};
+use crate::sensor::deflector::Deflector;
+use crate::survey::preset::{self, PresetUse};
 use crate::survey::{
     KeyPath, MAX_PRF_HZ, MAX_PULSE_SAMPLES, MAX_RANGE_M, MAX_WINDOW_SAMPLES, MIN_PULSE_FWHM_NS,
     RawSurvey, ScannerSettings,
@@ -18,14 +19,44 @@ pub(crate) struct Sensor {
     pub detector: DetectorConfig,
     pub speckle_looks: Option<f64>,
     pub intensity_gain: f64,
+    /// The instrument preset and the keys it set.
+    pub preset: Option<PresetUse>,
+    /// Settings beyond the preset instrument's datasheet.
+    pub warnings: Vec<String>,
 }
 
 /// Checks `[scanner]` and `[receiver]`.
 pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
     let root = KeyPath::root();
     // [scanner]
-    let s = &raw.scanner;
     let sp = root.key("scanner");
+    let (applied, preset) = match raw.scanner.preset.as_deref() {
+        None => (None, None),
+        Some(id) => match preset::find(id) {
+            Some(p) => {
+                let (merged, set) = preset::apply(p, &raw.scanner);
+                (Some(merged), Some(PresetUse { preset: p, set }))
+            }
+            None => {
+                let ids: Vec<&str> = preset::PRESETS.iter().map(|p| p.id).collect();
+                let near = ids
+                    .iter()
+                    .min_by_key(|p| edit_distance(p, id))
+                    .filter(|p| edit_distance(p, id) <= 3)
+                    .map(|p| format!(" (did you mean \"{p}\"?)"))
+                    .unwrap_or_default();
+                c.err(
+                    sp.key("preset"),
+                    format!(
+                        "unknown instrument '{id}'{near}; presets: {}",
+                        ids.join(", ")
+                    ),
+                );
+                (None, None)
+            }
+        },
+    };
+    let s = applied.as_ref().unwrap_or(&raw.scanner);
     let prf_hz = c.positive(sp.key("prf_hz"), s.prf_hz, 100_000.0, " Hz");
     if prf_hz > MAX_PRF_HZ {
         c.err(
@@ -36,56 +67,7 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
             ),
         );
     }
-    let scan_frequency_hz = c.positive(
-        sp.key("scan_frequency_hz"),
-        s.scan_frequency_hz,
-        50.0,
-        " Hz",
-    );
-    if scan_frequency_hz > prf_hz / 4.0 {
-        c.err(
-            sp.key("scan_frequency_hz"),
-            format!(
-                "must be at most prf_hz / 4 = {} Hz, got {}: the mirror would sweep its \
-                 scan line with fewer than two pulses",
-                num(prf_hz / 4.0),
-                num(scan_frequency_hz)
-            ),
-        );
-    }
-    let scan_angle_given = match s.scan_angle_deg {
-        Some(a) if a >= 90.0 => {
-            c.err(
-                sp.key("scan_angle_deg"),
-                format!(
-                    "must be between 0 and 89°, got {a}: at 90° or more from nadir the beam \
-                     points at or above the horizon and meets no ground"
-                ),
-            );
-            None
-        }
-        other => other,
-    };
-    let scan_angle_deg = c.number(
-        sp.key("scan_angle_deg"),
-        scan_angle_given,
-        20.0,
-        0.0,
-        false,
-        89.0,
-        "°",
-    );
-    let profile = match s.mirror.as_deref() {
-        None | Some("triangle") => MirrorProfile::Triangle,
-        Some("sine") | Some("sinusoidal") => MirrorProfile::Sine,
-        Some(other) => {
-            c.err(
-                sp.key("mirror"),
-                format!("unknown mirror '{other}'; expected \"triangle\" or \"sine\""),
-            );
-            MirrorProfile::Triangle
-        }
-    };
+    let deflector = super::deflector::deflector(c, s, &sp, prf_hz);
     let divergence_mrad = c.number(
         sp.key("divergence_mrad"),
         s.divergence_mrad,
@@ -257,14 +239,22 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
             );
         }
     }
+    let warnings = match &preset {
+        Some(u) => preset::limits(
+            u.preset,
+            prf_hz,
+            match &deflector {
+                Deflector::Risley(_) => None,
+                _ => s.scan_frequency_hz,
+            },
+            deflector.max_off_nadir_rad().to_degrees(),
+        ),
+        None => Vec::new(),
+    };
     Sensor {
         scanner: ScannerSettings {
             prf_hz,
-            mirror: Mirror {
-                profile,
-                scan_frequency_hz,
-                scan_half_angle_rad: scan_angle_deg.to_radians(),
-            },
+            deflector,
             divergence_rad: divergence_mrad * 1e-3,
             subrays,
             min_range_m,
@@ -286,5 +276,7 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
         },
         speckle_looks: r.speckle.unwrap_or(false).then_some(speckle_looks),
         intensity_gain,
+        preset,
+        warnings,
     }
 }

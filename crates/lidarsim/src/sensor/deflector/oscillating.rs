@@ -1,4 +1,4 @@
-//! The scanner: oscillating mirror and pulse timing.
+//! The oscillating mirror (the specification's scanner).
 //!
 //! Specification, "Mirror" and Fig. 8/9: the mirror turns about the scanner
 //! `y` axis (flight direction), so the beam leaves the scanner in direction

@@ -1,0 +1,266 @@
+//! `[scanner]`'s deflector keys: which kind, and the keys of that kind.
+
+use super::Checker;
+use crate::message::num;
+use crate::sensor::deflector::risley::Prism;
+use crate::sensor::deflector::{Deflector, Fibre, Mirror, MirrorProfile, Palmer, Polygon, Risley};
+use crate::survey::KeyPath;
+use crate::survey::raw::RawScanner;
+
+/// The kinds, as the survey spells them.
+const KINDS: [&str; 5] = ["oscillating", "polygon", "palmer", "risley", "fibre"];
+
+/// Checks the deflector keys of `[scanner]` (`sp`) for pulses at `prf_hz`.
+pub(crate) fn deflector(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f64) -> Deflector {
+    let kind = match s.deflector.as_deref() {
+        None => "oscillating",
+        Some(k) if KINDS.contains(&k) => k,
+        Some("conic") => "palmer",
+        Some("fiber") => "fibre",
+        Some(other) => {
+            c.err(
+                sp.key("deflector"),
+                format!(
+                    "unknown deflector '{other}'; expected one of {}",
+                    KINDS.map(|k| format!("\"{k}\"")).join(", ")
+                ),
+            );
+            "oscillating"
+        }
+    };
+    // Keys that belong to other kinds.
+    let only = [
+        ("mirror", s.mirror.is_some(), "oscillating"),
+        ("facets", s.facets.is_some(), "polygon"),
+        (
+            "scan_angle_along_deg",
+            s.scan_angle_along_deg.is_some(),
+            "palmer",
+        ),
+        (
+            "prism_deviation_deg",
+            s.prism_deviation_deg.is_some(),
+            "risley",
+        ),
+        (
+            "rotor_frequency_hz",
+            s.rotor_frequency_hz.is_some(),
+            "risley",
+        ),
+        ("fibres", s.fibres.is_some(), "fibre"),
+        (
+            "scan_angle_deg",
+            s.scan_angle_deg.is_some() && kind == "risley",
+            "a deflector other than risley (the prisms set the field of view)",
+        ),
+        (
+            "scan_frequency_hz",
+            s.scan_frequency_hz.is_some() && kind == "risley",
+            "a deflector other than risley (the rotors set the pattern)",
+        ),
+    ];
+    for (key, given, owner) in only {
+        if given && (owner.contains(' ') || owner != kind) {
+            let owner = if owner.contains(' ') {
+                owner.to_string()
+            } else {
+                format!("deflector = \"{owner}\"")
+            };
+            c.err(
+                sp.key(key),
+                format!("applies only to {owner}; this scanner's deflector is \"{kind}\""),
+            );
+        }
+    }
+    if kind == "risley" {
+        return Deflector::Risley(risley(c, s, sp, prf_hz));
+    }
+    let freq_key = sp.key("scan_frequency_hz");
+    let scan_frequency_hz = c.positive(freq_key.clone(), s.scan_frequency_hz, 50.0, " Hz");
+    // A polygon's facet may look up to ±180° (a mirror turning a full
+    // circle, as on UAV scanners that see sideways and up); the other
+    // deflectors look down.
+    let widest = if kind == "polygon" { 180.0 } else { 89.0 };
+    let scan_angle_deg = scan_angle(c, sp.key("scan_angle_deg"), s.scan_angle_deg, widest);
+    let half = scan_angle_deg.to_radians();
+    // Fewest pulse slots per scan line (or per turn): below this the
+    // pattern is not drawn at all.
+    let limit = |c: &mut Checker, divisor: f64, label: &str, what: &str| {
+        let most = prf_hz / divisor;
+        if scan_frequency_hz > most {
+            c.err(
+                freq_key.clone(),
+                format!(
+                    "must be at most prf_hz / {label} = {} Hz, got {}: {what}",
+                    num(most),
+                    num(scan_frequency_hz)
+                ),
+            );
+        }
+    };
+    match kind {
+        "polygon" => {
+            let facets = c.count(sp.key("facets"), s.facets, 4, 2, 64) as u32;
+            let sweep_half_deg = 360.0 / f64::from(facets);
+            if scan_angle_deg > sweep_half_deg {
+                c.err(
+                    sp.key("scan_angle_deg"),
+                    format!(
+                        "must be at most 360° / facets = {}° for {facets} facets (each facet \
+                         sweeps the beam through ±{}°), got {}",
+                        num(sweep_half_deg),
+                        num(sweep_half_deg),
+                        num(scan_angle_deg)
+                    ),
+                );
+            }
+            limit(
+                c,
+                4.0,
+                "4",
+                "scan_frequency_hz is the polygon's scan lines per second, and a line needs \
+                 at least four pulse slots",
+            );
+            Deflector::Polygon(Polygon {
+                facets,
+                line_rate_hz: scan_frequency_hz,
+                scan_half_angle_rad: half,
+            })
+        }
+        "palmer" => {
+            let along = match s.scan_angle_along_deg {
+                None => scan_angle_deg,
+                given => scan_angle(c, sp.key("scan_angle_along_deg"), given, 89.0),
+            };
+            limit(
+                c,
+                8.0,
+                "8",
+                "scan_frequency_hz is the Palmer scanner's turns per second, and a turn \
+                 needs at least eight pulses to draw its ellipse",
+            );
+            Deflector::Palmer(Palmer {
+                rotation_hz: scan_frequency_hz,
+                across_half_angle_rad: half,
+                along_half_angle_rad: along.to_radians(),
+            })
+        }
+        "fibre" => {
+            let fibres = c.count(sp.key("fibres"), s.fibres, 128, 2, 4096) as u32;
+            limit(
+                c,
+                f64::from(fibres),
+                "fibres",
+                "scan_frequency_hz is the fibre fan's sweeps per second, and each sweep \
+                 fires every fibre once",
+            );
+            Deflector::Fibre(Fibre {
+                fibres,
+                scan_half_angle_rad: half,
+                sweep_rate_hz: scan_frequency_hz,
+            })
+        }
+        _ => {
+            let profile = match s.mirror.as_deref() {
+                None | Some("triangle") => MirrorProfile::Triangle,
+                Some("sine") | Some("sinusoidal") => MirrorProfile::Sine,
+                Some(other) => {
+                    c.err(
+                        sp.key("mirror"),
+                        format!("unknown mirror '{other}'; expected \"triangle\" or \"sine\""),
+                    );
+                    MirrorProfile::Triangle
+                }
+            };
+            limit(
+                c,
+                4.0,
+                "4",
+                "the mirror would sweep its scan line with fewer than two pulses",
+            );
+            Deflector::Oscillating(Mirror {
+                profile,
+                scan_frequency_hz,
+                scan_half_angle_rad: half,
+            })
+        }
+    }
+}
+
+/// A scan half-angle, degrees: from 0 to `widest` (default 20).
+fn scan_angle(c: &mut Checker, key: KeyPath, value: Option<f64>, widest: f64) -> f64 {
+    let given = match value {
+        Some(a) if a >= 90.0 && widest < 90.0 => {
+            c.err(
+                key.clone(),
+                format!(
+                    "must be between 0 and 89°, got {a}: at 90° or more from nadir the beam \
+                     points at or above the horizon and meets no ground"
+                ),
+            );
+            None
+        }
+        other => other,
+    };
+    c.number(key, given, 20.0, 0.0, false, widest, "°")
+}
+
+/// The Risley prisms: two or three, deviations adding up to less than 89°.
+fn risley(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f64) -> Risley {
+    let dev_key = sp.key("prism_deviation_deg");
+    let rot_key = sp.key("rotor_frequency_hz");
+    let (Some(devs), Some(rots)) = (&s.prism_deviation_deg, &s.rotor_frequency_hz) else {
+        let missing = if s.prism_deviation_deg.is_none() {
+            dev_key
+        } else {
+            rot_key
+        };
+        c.err(
+            missing,
+            "a Risley scanner needs prism_deviation_deg and rotor_frequency_hz, one value per \
+             prism (e.g. [17.6, 17.6] and [-77.7, 121.6])",
+        );
+        return Risley { prisms: Vec::new() };
+    };
+    if !(2..=3).contains(&devs.len()) || devs.len() != rots.len() {
+        c.err(
+            rot_key,
+            format!(
+                "give two or three prisms, the same number in prism_deviation_deg and \
+                 rotor_frequency_hz; got {} and {}",
+                devs.len(),
+                rots.len()
+            ),
+        );
+        return Risley { prisms: Vec::new() };
+    }
+    let mut prisms = Vec::new();
+    for (i, (&d, &f)) in devs.iter().zip(rots).enumerate() {
+        let d = c.number(dev_key.index(i), Some(d), 10.0, 0.0, true, 45.0, "°");
+        if !f.is_finite() || f == 0.0 || f.abs() > prf_hz / 8.0 {
+            c.err(
+                rot_key.index(i),
+                format!(
+                    "must be a non-zero rate of at most prf_hz / 8 = {} Hz in size, got {}",
+                    num(prf_hz / 8.0),
+                    num(f)
+                ),
+            );
+        }
+        prisms.push(Prism {
+            deviation_rad: d.to_radians(),
+            frequency_hz: f,
+        });
+    }
+    let r = Risley { prisms };
+    if r.half_field_of_view_rad().to_degrees() >= 89.0 {
+        c.err(
+            dev_key,
+            format!(
+                "the deviations add up to {}°: the beam would reach the horizon",
+                num(r.half_field_of_view_rad().to_degrees())
+            ),
+        );
+    }
+    r
+}
