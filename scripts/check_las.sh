@@ -34,3 +34,7 @@ cargo run --release --quiet -- run scripts/fixtures/two-planes.toml -o target/ou
 # Terrain rasters written by GDAL (rasterio), flown, points read by laspy.
 rm -rf target/terrain-check
 "$venv/bin/python" scripts/check_terrain.py target/release/lidarsim target/terrain-check
+
+# The example survey of each beam deflector, read by laspy: scan angles,
+# scan direction flags and scanner channels.
+"$venv/bin/python" scripts/check_deflector_examples.py target/release/lidarsim target/deflector-examples

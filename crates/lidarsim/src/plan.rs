@@ -103,7 +103,10 @@ pub fn plan(survey: &Survey, world: &World) -> Plan {
                 0.0
             },
             footprint_diameter_m: h * s.divergence_rad,
-            scan_line_spacing_m: line.speed_mps / s.deflector.lines_per_s(),
+            scan_line_spacing_m: match s.deflector.lines_per_s() {
+                n if n > 0.0 => line.speed_mps / n,
+                _ => 0.0,
+            },
             across_track_spacing_m: h * step_rad,
         });
     }

@@ -237,3 +237,33 @@ fn fibre_array_keeps_its_fibres_fixed_across_the_fan() {
     // Every fibre fires once per sweep: 32 000 / 16 = 2 000 each.
     assert!(seen.iter().all(|&n| n.abs_diff(2000) <= 1), "{seen:?}");
 }
+
+/// RIEGL VQ-1560i: two channels through one polygon, tilted 14° forward
+/// and 14° backward, fire in turn. A beam `(sin θ, 0, cos θ)` tilted by α
+/// about the across-track axis meets flat ground `H·tan α` ahead of (or
+/// behind) the nadir point whatever θ, so each channel's points lie on
+/// their own line across the track, and the LAS channel field tells them
+/// apart.
+#[test]
+fn two_channels_look_forward_and_backward_in_turn() {
+    let points = fly(
+        "preset = \"riegl_vq_1560i\"\nprf_hz = 200000\nscan_frequency_hz = 100",
+        1.0,
+    );
+    let ahead = H * 14f64.to_radians().tan();
+    let mut count = [0usize; 2];
+    for p in &points {
+        let (_, dy) = offset(p);
+        let want = if p.channel == 0 { ahead } else { -ahead };
+        assert!(p.channel < 2);
+        assert!(
+            (dy - want).abs() < 0.01,
+            "channel {}: {dy} against {want}",
+            p.channel
+        );
+        count[p.channel as usize] += 1;
+    }
+    // Half each: a scan line's odd pulse count may favour one channel by
+    // one pulse (100 lines).
+    assert!(count[0].abs_diff(count[1]) <= 100, "{count:?}");
+}

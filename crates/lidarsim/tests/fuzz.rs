@@ -338,6 +338,7 @@ fn las_header_of_a_resumed_run_never_panics() {
             pulse_index: u64::from(i),
             object_id: 0,
             component: 0,
+            channel: 0,
             error_m: lidarsim::geometry::DVec3::ZERO,
             beam_dir: -lidarsim::geometry::DVec3::Z,
             incidence_angle_deg: Some(0.0),

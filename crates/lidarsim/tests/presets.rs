@@ -144,6 +144,18 @@ fn keys_override_the_preset_and_limits_are_warned() {
         51.0,
     );
     assert_eq!(s.scanner.deflector.kind(), "oscillating");
+    // Naming the preset's own kind keeps its deflector keys.
+    let (s, _) = survey(
+        "preset = \"riegl_vq_780i\"\ndeflector = \"polygon\"",
+        650.0,
+        51.0,
+    );
+    assert!(
+        s.scanner
+            .deflector
+            .describe()
+            .contains("8 facets, 225 lines/s")
+    );
     // An unknown instrument is an error naming the key, with the nearest id.
     let e = Survey::from_toml("[scanner]\npreset = \"riegl_vq_780\"\n", None).unwrap_err();
     let e = e.to_string();

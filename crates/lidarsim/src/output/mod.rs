@@ -83,6 +83,9 @@ pub struct PointRecord {
     /// What returned it: 0 a surface, 1 foliage, 2 a trunk (written to the
     /// LAS user data byte).
     pub component: u8,
+    /// The scanner channel that fired the pulse, 0–3 (LAS scanner
+    /// channel).
+    pub channel: u8,
 }
 
 /// The recorded waveforms of the pulses of one block that have echoes, in

@@ -198,6 +198,7 @@ mod tests {
                     pulse_index: 0,
                     object_id: 0,
                     component: 0,
+                    channel: 0,
                     incidence_angle_deg: Some(0.0),
                     echo_time_ps: 0.0,
                 });

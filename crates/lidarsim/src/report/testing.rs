@@ -30,6 +30,7 @@ pub(super) fn rec(
         pulse_index: pulse,
         object_id: 0,
         component: 0,
+        channel: 0,
         incidence_angle_deg: Some(0.0),
         echo_time_ps: 0.0,
     }

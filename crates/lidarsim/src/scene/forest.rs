@@ -63,7 +63,7 @@ pub fn inside(poly: &[[f64; 2]], x: f64, y: f64) -> bool {
 ///
 /// The stems are placed one after another (each must keep its distance
 /// from those before it); each accepted stem then takes the next
-/// [`DRAWS_PER_TREE`] numbers of the stream for its attributes, which are
+/// four numbers of the stream for its attributes, which are
 /// worked out afterwards on all threads from the stream's position at that
 /// stem: the same trees as drawing them in turn.
 pub fn generate(spec: &ForestSpec, ground_z: &(dyn Fn(f64, f64) -> f64 + Sync)) -> Vec<TreeSpec> {

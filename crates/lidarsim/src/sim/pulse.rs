@@ -27,6 +27,7 @@ use crate::rng::{Purpose, Stream};
 use crate::scene::{Shape, SurfaceClass};
 use crate::sensor::Pose;
 use crate::sensor::beam::{BeamPattern, FINE_PER_CELL};
+use crate::sensor::channel::{Channel, channel_of};
 use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
 use crate::waveform::Return;
@@ -39,6 +40,9 @@ struct Emission {
     t: f64,
     /// The true pose of the platform.
     pose: Pose,
+    /// The channel that fired, and its mounting (`None`: a single
+    /// straight channel).
+    channel: (u8, Option<DMat3>),
     /// Body-to-world rotation of the true attitude.
     body: DMat3,
     /// The scanner's position: the pose's plus the lever arm.
@@ -141,12 +145,24 @@ impl Simulator<'_> {
         let pose = line.pose_in(&frame, t_line);
         let (body, rot) = scratch.frames.rotations(&pose.attitude, self.boresight);
         let origin = pose.position_m + body * s.navigation.lever_arm_m;
-        // The deflection's third column is the beam direction.
-        let deflection = deflector.beam_frame(t);
+        // The deflection's third column is the beam direction; a channel of
+        // a multi-channel head turns it by its mounting.
+        let channels = &s.scanner.channels;
+        let channel = if channels.len() == 1 && channels[0] == Channel::STRAIGHT {
+            (0, None)
+        } else {
+            let c = channel_of(k, channels.len());
+            (c as u8, Some(channels[c].mount()))
+        };
+        let deflection = match channel.1 {
+            Some(mount) => mount * deflector.beam_frame(t),
+            None => deflector.beam_frame(t),
+        };
         Some(Emission {
             t_line,
             t,
             pose,
+            channel,
             body,
             origin,
             central: rot * deflection.z_axis,
@@ -364,6 +380,10 @@ impl Simulator<'_> {
                 obs.attitude.body_to_world()
             };
             // `Attitude::scanner_to_world` from that rotation.
+            let beam_obs = match em.channel.1 {
+                Some(mount) => mount * beam_obs,
+                None => beam_obs,
+            };
             let dir = obs_body * SCANNER_TO_LEVEL_NORTH * beam_obs;
             (obs.position_m, obs_body, dir)
         };
@@ -445,6 +465,7 @@ impl Simulator<'_> {
                 return_number: (i + 1) as u8,
                 number_of_returns: n as u8,
                 scan_direction_positive,
+                channel: em.channel.0,
                 edge_of_flight_line: edge,
                 scan_angle_deg,
                 classification,

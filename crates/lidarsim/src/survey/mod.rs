@@ -29,6 +29,7 @@ use crate::detection::DetectorConfig;
 use crate::geometry::DVec3;
 pub use crate::message::num;
 use crate::scene::Material;
+use crate::sensor::channel::Channel;
 use crate::sensor::deflector::Deflector;
 use crate::sensor::navigation::NavigationErrors;
 use crate::sensor::platform::{FlightLine, SwayConfig};
@@ -97,6 +98,8 @@ pub struct ScannerSettings {
     pub prf_hz: f64,
     /// What deflects the beam.
     pub deflector: Deflector,
+    /// The beams of the head, firing in turn (one for most scanners).
+    pub channels: Vec<Channel>,
     /// Full beam divergence, rad.
     pub divergence_rad: f64,
     /// Sub-rays per pulse.

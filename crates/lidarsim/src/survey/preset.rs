@@ -9,10 +9,10 @@
 //! HELIOS++ (`scanners_als.xml`), as each preset's `source` says. The beam
 //! divergence here is the full angle at 1/e² of the peak irradiance.
 //!
-//! Presets model one beam. Two-channel instruments (RIEGL VQ-1560i) and
-//! multi-emitter ones (Livox Avia's six emitters) are modelled as their
-//! single-channel equivalent at the total pulse rate, and elliptical beams
-//! by their narrow axis; each preset's `note` says so.
+//! Two-channel instruments (RIEGL VQ-1560i) have their channels
+//! (`[[scanner.channels]]`); the Livox Avia's six emitters are modelled as
+//! one beam at their total pulse rate, and elliptical beams by their
+//! narrow axis; each preset's `note` says what it leaves out.
 
 use crate::message::num;
 use crate::survey::raw::RawScanner;
@@ -67,8 +67,9 @@ max_returns = 4"#,
         id: "optech_galaxy",
         name: "Teledyne Optech Galaxy",
         source: "HELIOS++ scanners_als.xml (optech_galaxy): 35–550 kHz, 0–120 Hz, ±30°, \
-                 1064 nm, 8 ns, 8 returns; divergence 0.25 mrad (Optech datasheet, 1/e)",
-        note: "",
+                 1064 nm, 8 ns, 8 returns; divergence 0.25 mrad (Optech datasheet)",
+        note: "the datasheet's 0.25 mrad divergence is taken as the 1/e² angle (HELIOS++ uses \
+               0.354 mrad, √2 × 0.25)",
         keys: r#"deflector = "oscillating"
 mirror = "triangle"
 prf_hz = 550000
@@ -137,8 +138,8 @@ max_returns = 5"#,
         source: "RIEGL VQ-1560i datasheet: two channels, up to 2 MHz (1.33 M measurements/s on \
                  the ground), 60° FOV; HELIOS++ scanners_als.xml: ±14° fore/aft channel tilt, \
                  40–600 lines/s",
-        note: "modelled as one channel at the total rate: the ±14° fore/aft channels and their \
-               crossing lines are not drawn",
+        note: "both channels share one polygon and fire in turn (1 MHz each at 2 MHz); the 8° \
+               yaw of an early HELIOS++ definition is left out (not in the datasheet)",
         keys: r#"deflector = "polygon"
 facets = 8
 prf_hz = 2000000
@@ -147,7 +148,13 @@ scan_angle_deg = 30
 divergence_mrad = 0.25
 wavelength_nm = 1064
 pulse_fwhm_ns = 4
-max_returns = 5"#,
+max_returns = 5
+
+[[channels]]
+along_tilt_deg = 14
+
+[[channels]]
+along_tilt_deg = -14"#,
         prf_hz: &[
             150_000.0,
             250_000.0,
@@ -230,8 +237,9 @@ max_returns = 2"#,
         source: "HELIOS++ scanners_als.xml (DJI Zenmuse L1 = Livox Avia): three prisms at \
                  −131.55, 40.80 and 213.16 Hz, 6 emitters × 40 kHz = 240 k points/s, 905 nm, \
                  3 returns; 70.4° × 77.2° FOV (Livox Avia user manual)",
-        note: "one beam at the six emitters' total rate; prism deviations are the exact \
-               single-prism ones scaled to the 38.6° half FOV",
+        note: "one beam at the six emitters' total rate; the 70.4° × 77.2° field of view as a \
+               circle of ±38.6° (prism deviations: the exact single-prism ones scaled to it); \
+               the elliptical beam by its narrow axis (0.89 mrad at 1/e²)",
         keys: r#"deflector = "risley"
 prism_deviation_deg = [19.06, 18.01, 1.53]
 rotor_frequency_hz = [-131.5463, 40.8032, 213.1611]
@@ -252,8 +260,8 @@ pub fn find(id: &str) -> Option<&'static Preset> {
     PRESETS.iter().find(|p| p.id == id)
 }
 
-/// Keys that belong to one deflector kind: a survey that names its own
-/// deflector takes none of these from the preset.
+/// Keys that belong to one deflector kind: a survey that names another
+/// deflector than the preset's takes none of these from the preset.
 const DEFLECTOR_KEYS: [&str; 8] = [
     "mirror",
     "facets",
@@ -282,8 +290,12 @@ pub fn apply(preset: &Preset, raw: &RawScanner) -> (RawScanner, Vec<String>) {
         Ok(toml::Value::Table(t)) => t,
         _ => Default::default(),
     };
-    let own_deflector = table.contains_key("deflector");
     let keys: toml::Table = toml::from_str(preset.keys).expect("preset keys are valid TOML");
+    // A survey that names another kind of deflector than the instrument's
+    // takes none of the instrument's deflector keys.
+    let own_deflector = table
+        .get("deflector")
+        .is_some_and(|own| Some(own) != keys.get("deflector"));
     let mut set = Vec::new();
     for (k, v) in keys {
         if table.contains_key(&k) || (own_deflector && DEFLECTOR_KEYS.contains(&k.as_str())) {
@@ -298,13 +310,24 @@ pub fn apply(preset: &Preset, raw: &RawScanner) -> (RawScanner, Vec<String>) {
     (merged, set)
 }
 
-/// Warnings for settings beyond the instrument's datasheet limits.
+/// The deflector kind the preset sets.
+pub fn kind(preset: &Preset) -> String {
+    let keys: toml::Table = toml::from_str(preset.keys).expect("preset keys are valid TOML");
+    keys.get("deflector")
+        .and_then(|k| k.as_str())
+        .unwrap_or("oscillating")
+        .to_string()
+}
+
+/// Warnings for settings beyond the instrument's datasheet limits: the
+/// PRF, and — when the survey keeps the instrument's kind of deflector —
+/// its scan rate and field of view.
 pub fn limits(
     preset: &Preset,
     prf_hz: f64,
-    scan_frequency_hz: Option<f64>,
-    half_angle_deg: f64,
+    deflector: &crate::sensor::deflector::Deflector,
 ) -> Vec<String> {
+    use crate::sensor::deflector::Deflector;
     let mut out = Vec::new();
     let list = |v: &[f64]| v.iter().map(|x| num(*x)).collect::<Vec<_>>().join(", ");
     let prf_ok = if preset.prf_range {
@@ -324,6 +347,16 @@ pub fn limits(
             num(prf_hz)
         ));
     }
+    if deflector.kind() != kind(preset) {
+        return out;
+    }
+    let scan_frequency_hz = match deflector {
+        Deflector::Oscillating(m) => Some(m.scan_frequency_hz),
+        Deflector::Polygon(p) => Some(p.line_rate_hz),
+        Deflector::Palmer(p) => Some(p.rotation_hz),
+        Deflector::Fibre(f) => Some(f.sweep_rate_hz),
+        Deflector::Risley(_) => None,
+    };
     if let (Some(f), [lo, hi]) = (scan_frequency_hz, preset.scan_frequency_hz)
         && (f < *lo || f > *hi)
     {
@@ -335,12 +368,20 @@ pub fn limits(
             num(f)
         ));
     }
-    if half_angle_deg > preset.max_scan_angle_deg + 1e-9 {
+    let half_angle_deg = deflector.max_off_nadir_rad().to_degrees();
+    if half_angle_deg > preset.max_scan_angle_deg + 1e-6 {
+        let key = match deflector {
+            Deflector::Risley(_) => "prism_deviation_deg",
+            Deflector::Palmer(p) if p.along_half_angle_rad > p.across_half_angle_rad => {
+                "scan_angle_along_deg"
+            }
+            _ => "scan_angle_deg",
+        };
         out.push(format!(
-            "key `scanner.scan_angle_deg`: the {} sees at most ±{}° (datasheet), not ±{}°",
+            "key `scanner.{key}`: the {} sees at most ±{}° (datasheet), not ±{:.2}°",
             preset.name,
             num(preset.max_scan_angle_deg),
-            num(half_angle_deg)
+            half_angle_deg
         ));
     }
     out

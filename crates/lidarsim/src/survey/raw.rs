@@ -101,6 +101,9 @@ pub struct RawScanner {
     pub rotor_frequency_hz: Option<Vec<f64>>,
     /// Fibre array: fibres in the fan.
     pub fibres: Option<i64>,
+    /// `[[scanner.channels]]`: the beams of a multi-channel head, firing
+    /// in turn.
+    pub channels: Option<Vec<RawChannel>>,
     pub divergence_mrad: Option<f64>,
     pub subrays: Option<i64>,
     pub pulse_fwhm_ns: Option<f64>,
@@ -113,6 +116,18 @@ pub struct RawScanner {
     pub max_range_m: Option<f64>,
     pub reference_range_m: Option<f64>,
     pub wavelength_nm: Option<f64>,
+}
+
+/// `[[scanner.channels]]`: one beam of a multi-channel head.
+#[skip_serializing_none]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawChannel {
+    /// Tilt along the track, degrees, positive forward.
+    pub along_tilt_deg: Option<f64>,
+    /// Turn about the scanner's z axis, degrees, positive to the left.
+    pub yaw_deg: Option<f64>,
 }
 
 /// `[receiver]`: sampling, noise and detection.

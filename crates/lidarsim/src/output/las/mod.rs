@@ -475,10 +475,11 @@ impl LasWriter {
             let rn = p.return_number.clamp(1, 15);
             let nr = p.number_of_returns.clamp(1, 15);
             rec[14] = rn | (nr << 4);
-            // Classification flags 0, scanner channel 0, then the scan
-            // direction flag (bit 6) and edge of flight line (bit 7).
-            rec[15] =
-                (u8::from(p.scan_direction_positive) << 6) | (u8::from(p.edge_of_flight_line) << 7);
+            // Classification flags 0, the scanner channel (bits 4–5), the
+            // scan direction flag (bit 6) and edge of flight line (bit 7).
+            rec[15] = ((p.channel & 3) << 4)
+                | (u8::from(p.scan_direction_positive) << 6)
+                | (u8::from(p.edge_of_flight_line) << 7);
             rec[16] = p.classification;
             rec[17] = p.component; // user data: what returned the echo
             // Scan angle in 0.006° increments, −30 000 … +30 000.

@@ -45,6 +45,7 @@ fn point(x: f64, t: f64) -> PointRecord {
         incidence_angle_deg: Some(0.0),
         echo_time_ps: 0.0,
         component: 0,
+        channel: 0,
     }
 }
 

@@ -1,8 +1,10 @@
 //! The fibre array (TopoSys Falcon, Trimble Harrier): a line of `M` glass
 //! fibres fanned across the track behind the telescope. A small nodding
-//! mirror sends successive pulses down successive fibres, so each sweep
-//! of the mirror fires the whole fan once, always in the same order, and
-//! the fibres' directions never change: fibre `j` looks at
+//! mirror sweeps the laser across the fibre ends, `f` sweeps per second,
+//! so each sweep fires the whole fan in the same order — each fibre once
+//! when `PRF = M·f`, as the instruments run, or several pulses in a row
+//! at a higher PRF — and the fibres' directions never change: fibre `j`
+//! looks at
 //! `θ_j = θ (1 − 2j/(M − 1))` across the track (positive to the left: the
 //! sweep runs from left to right).
 

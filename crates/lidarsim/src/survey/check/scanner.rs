@@ -4,7 +4,6 @@
 use super::Checker;
 use crate::detection::{DetectorConfig, ReturnSelection};
 use crate::message::{edit_distance, num};
-use crate::sensor::deflector::Deflector;
 use crate::survey::preset::{self, PresetUse};
 use crate::survey::{
     KeyPath, MAX_PRF_HZ, MAX_PULSE_SAMPLES, MAX_RANGE_M, MAX_WINDOW_SAMPLES, MIN_PULSE_FWHM_NS,
@@ -68,6 +67,7 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
         );
     }
     let deflector = super::deflector::deflector(c, s, &sp, prf_hz);
+    let channels = super::deflector::channels(c, s, &sp);
     let divergence_mrad = c.number(
         sp.key("divergence_mrad"),
         s.divergence_mrad,
@@ -240,21 +240,14 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
         }
     }
     let warnings = match &preset {
-        Some(u) => preset::limits(
-            u.preset,
-            prf_hz,
-            match &deflector {
-                Deflector::Risley(_) => None,
-                _ => s.scan_frequency_hz,
-            },
-            deflector.max_off_nadir_rad().to_degrees(),
-        ),
+        Some(u) => preset::limits(u.preset, prf_hz, &deflector),
         None => Vec::new(),
     };
     Sensor {
         scanner: ScannerSettings {
             prf_hz,
             deflector,
+            channels,
             divergence_rad: divergence_mrad * 1e-3,
             subrays,
             min_range_m,
