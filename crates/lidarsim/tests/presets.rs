@@ -124,6 +124,17 @@ fn keys_override_the_preset_and_limits_are_warned() {
     );
     assert_eq!(s.scanner.prf_hz, 400_000.0);
     assert_eq!(s.scanner.divergence_rad, 0.5e-3);
+    assert_eq!(s.scanner.divergence_along_rad, 0.5e-3);
+    // The Livox beam is elliptical; setting the divergence makes it round.
+    let (l, _) = survey("preset = \"livox_mid_70\"", 50.0, 5.0);
+    close(l.scanner.divergence_rad, 0.89e-3, 1e-12, "across");
+    close(l.scanner.divergence_along_rad, 8.3e-3, 1e-12, "along");
+    let (l, _) = survey(
+        "preset = \"livox_mid_70\"\ndivergence_mrad = 1.0",
+        50.0,
+        5.0,
+    );
+    close(l.scanner.divergence_along_rad, 1e-3, 1e-12, "round");
     let set = &s.preset.as_ref().unwrap().set;
     assert!(
         set.iter()

@@ -1,7 +1,8 @@
 //! `report.html`: one self-contained page per run — survey parameters, the
 //! figures of `summary.json`, top views by height, intensity and class, a
 //! cross-section, returns per pulse, the point density against the plan,
-//! the flight (attitude against time, observed against true trajectory),
+//! the scan pattern of the first scan lines over level ground, the flight
+//! (attitude against time, observed against true trajectory),
 //! the points' georeferencing errors when the survey has navigation
 //! errors, and sample waveforms — with every picture embedded, so it opens
 //! in any browser without a network.
@@ -23,6 +24,7 @@ mod flight;
 mod maps;
 mod markup;
 mod page;
+mod pattern;
 mod sink;
 mod state;
 #[cfg(test)]
@@ -32,4 +34,5 @@ pub use error_stats::ErrorStats;
 pub use flight::{attitude_plot, trajectory_error_plots};
 pub use markup::base64;
 pub use page::html;
+pub use pattern::{pattern_points, scan_pattern_plot};
 pub use sink::ReportSink;

@@ -44,6 +44,7 @@ pub fn html(
     let mut h = String::new();
     head(&mut h);
     survey_section(&mut h, survey, lines, summary);
+    pattern_section(&mut h, survey, lines, summary)?;
     summary_section(&mut h, summary);
     top_views_section(&mut h, sink)?;
     cross_section(&mut h, sink)?;
@@ -53,6 +54,33 @@ pub fn html(
     waveforms_section(&mut h, waveforms)?;
     let _ = writeln!(h, "</body></html>");
     Ok(h)
+}
+
+/// The scan pattern of the first flight line's first scan lines.
+fn pattern_section(
+    h: &mut String,
+    survey: &Survey,
+    lines: &[FlightLine],
+    summary: &Summary,
+) -> io::Result<()> {
+    let (Some(line), Some(plan)) = (lines.first(), summary.plan.lines.first()) else {
+        return Ok(());
+    };
+    let height = plan.height_above_ground_m.max(1.0);
+    let _ = write!(
+        h,
+        "<h2>Scan pattern</h2><p>Where the pulses of the first scan lines meet level ground \
+         {height:.0} m below the scanner at {} m/s (the first flight line's height and speed), \
+         from above, flight direction up, coloured by time from dark (first) to light (last): \
+         {}.</p>{}",
+        line.speed_mps,
+        esc(&survey.scanner.deflector.describe()),
+        img_tag(
+            &super::scan_pattern_plot(survey, height, line.speed_mps),
+            "scan pattern"
+        )?
+    );
+    Ok(())
 }
 
 /// The page's head, its style and its title.

@@ -105,7 +105,11 @@ impl<'a> Simulator<'a> {
             survey,
             caster: world.index(),
             lines: &world.lines,
-            beam: Beam::new(survey.scanner.subrays, survey.scanner.divergence_rad),
+            beam: Beam::elliptical(
+                survey.scanner.subrays,
+                survey.scanner.divergence_rad,
+                survey.scanner.divergence_along_rad,
+            ),
             discontinuity_m: crate::geometry::SPEED_OF_LIGHT_MPS * survey.receiver.pulse.fwhm_s()
                 / 2.0,
             speckle: survey.speckle_looks.and_then(Speckle::new),

@@ -102,6 +102,9 @@ pub struct ScannerSettings {
     pub channels: Vec<Channel>,
     /// Full beam divergence, rad.
     pub divergence_rad: f64,
+    /// Full beam divergence along the track (the beam's y axis), rad:
+    /// `divergence_rad` for a round beam.
+    pub divergence_along_rad: f64,
     /// Sub-rays per pulse.
     pub subrays: usize,
     /// Closest range the receiver records, m.

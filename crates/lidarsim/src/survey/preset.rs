@@ -11,8 +11,8 @@
 //!
 //! Two-channel instruments (RIEGL VQ-1560i) have their channels
 //! (`[[scanner.channels]]`); the Livox Avia's six emitters are modelled as
-//! one beam at their total pulse rate, and elliptical beams by their
-//! narrow axis; each preset's `note` says what it leaves out.
+//! one beam at their total pulse rate; elliptical beams have both
+//! divergences; each preset's `note` says what it leaves out.
 
 use crate::message::num;
 use crate::survey::raw::RawScanner;
@@ -217,12 +217,14 @@ max_returns = 9"#,
                  0.28° × 0.03° beam; rotors −4664 and +7294 rpm (Brazeal et al., Sensors \
                  21:4722, 2021; HELIOS++ scanners_als.xml)",
         note: "prism deviations are the first-order ones (17.6° each) that give the 70.4° FOV; \
-               the elliptical beam is modelled by its narrow axis (0.89 mrad at 1/e²)",
+               the beam's 0.03° × 0.28° (FWHM) as 0.89 × 8.3 mrad at 1/e², the wide axis \
+               along the track (the mounting decides it)",
         keys: r#"deflector = "risley"
 prism_deviation_deg = [17.6, 17.6]
 rotor_frequency_hz = [-77.733333, 121.566667]
 prf_hz = 100000
 divergence_mrad = 0.89
+divergence_along_mrad = 8.3
 wavelength_nm = 905
 pulse_fwhm_ns = 4
 max_returns = 2"#,
@@ -239,12 +241,14 @@ max_returns = 2"#,
                  3 returns; 70.4° × 77.2° FOV (Livox Avia user manual)",
         note: "one beam at the six emitters' total rate; the 70.4° × 77.2° field of view as a \
                circle of ±38.6° (prism deviations: the exact single-prism ones scaled to it); \
-               the elliptical beam by its narrow axis (0.89 mrad at 1/e²)",
+               the beam's 0.03° × 0.28° (FWHM) as 0.89 × 8.3 mrad at 1/e², the wide axis \
+               along the track",
         keys: r#"deflector = "risley"
 prism_deviation_deg = [19.06, 18.01, 1.53]
 rotor_frequency_hz = [-131.5463, 40.8032, 213.1611]
 prf_hz = 240000
 divergence_mrad = 0.89
+divergence_along_mrad = 8.3
 wavelength_nm = 905
 pulse_fwhm_ns = 4
 max_returns = 3"#,
@@ -298,7 +302,13 @@ pub fn apply(preset: &Preset, raw: &RawScanner) -> (RawScanner, Vec<String>) {
         .is_some_and(|own| Some(own) != keys.get("deflector"));
     let mut set = Vec::new();
     for (k, v) in keys {
-        if table.contains_key(&k) || (own_deflector && DEFLECTOR_KEYS.contains(&k.as_str())) {
+        // A survey that sets the divergence has a round beam unless it
+        // sets the divergence along the track too.
+        let own_beam = k == "divergence_along_mrad" && table.contains_key("divergence_mrad");
+        if table.contains_key(&k)
+            || own_beam
+            || (own_deflector && DEFLECTOR_KEYS.contains(&k.as_str()))
+        {
             continue;
         }
         set.push(format!("{k} = {v}"));

@@ -105,6 +105,9 @@ pub struct RawScanner {
     /// in turn.
     pub channels: Option<Vec<RawChannel>>,
     pub divergence_mrad: Option<f64>,
+    /// Divergence along the track for an elliptical beam (default: as
+    /// `divergence_mrad`, which is then the divergence across).
+    pub divergence_along_mrad: Option<f64>,
     pub subrays: Option<i64>,
     pub pulse_fwhm_ns: Option<f64>,
     pub pulse_shape: Option<String>,

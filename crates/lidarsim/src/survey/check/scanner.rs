@@ -77,6 +77,27 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
         100.0,
         " mrad",
     );
+    let divergence_along_mrad = match s.divergence_along_mrad {
+        None => divergence_mrad,
+        given => {
+            let along = c.number(
+                sp.key("divergence_along_mrad"),
+                given,
+                divergence_mrad,
+                0.0,
+                false,
+                100.0,
+                " mrad",
+            );
+            if divergence_mrad == 0.0 && along > 0.0 {
+                c.err(
+                    sp.key("divergence_along_mrad"),
+                    "an elliptical beam needs divergence_mrad (across) above 0 as well",
+                );
+            }
+            along
+        }
+    };
     let subrays = c.count(sp.key("subrays"), s.subrays, 19, 1, 10_000) as usize;
     let pulse_fwhm_ns = match s.pulse_fwhm_ns {
         Some(v) if v > 0.0 && v < MIN_PULSE_FWHM_NS => {
@@ -249,6 +270,7 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
             deflector,
             channels,
             divergence_rad: divergence_mrad * 1e-3,
+            divergence_along_rad: divergence_along_mrad * 1e-3,
             subrays,
             min_range_m,
             max_range_m,
