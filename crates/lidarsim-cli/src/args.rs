@@ -145,7 +145,8 @@ pub struct RenderArgs {
     /// Output PNG.
     #[arg(short, long, default_value = "top.png")]
     pub output: PathBuf,
-    /// Colours: height, intensity, class, return or strip.
+    /// Colours: height, intensity, class, return, strip or time (GPS time:
+    /// the order in which the scanner drew its pattern).
     #[arg(long, default_value = "height")]
     pub color: String,
     /// Pixel size, m (default: from the point density).

@@ -38,7 +38,7 @@ fn render(
     let by = ColorBy::from_name(color).ok_or_else(|| {
         (
             2,
-            format!("--color {color}: expected height, intensity, class, return or strip"),
+            format!("--color {color}: expected height, intensity, class, return, strip or time"),
         )
     })?;
     if resolution.is_some_and(|r| !(r.is_finite() && r > 0.0)) {
@@ -131,6 +131,7 @@ fn read_cloud(cloud: &Path) -> Result<Vec<lidarsim::render::RenderPoint>, String
                 return_number: p.return_number,
                 number_of_returns: p.number_of_returns,
                 source: p.point_source_id,
+                gps_time_s: p.gps_time.unwrap_or(0.0),
             })
         })
         .collect::<Result<Vec<RenderPoint>, _>>()

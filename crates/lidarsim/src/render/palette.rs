@@ -22,10 +22,13 @@ pub enum ColorBy {
     Return,
     /// Flight line.
     Strip,
+    /// GPS time, on a colour bar from the first point to the last: the
+    /// order in which the scanner drew its pattern.
+    Time,
 }
 
 impl ColorBy {
-    /// Parses `height`, `intensity`, `class`, `return` or `strip`.
+    /// Parses `height`, `intensity`, `class`, `return`, `strip` or `time`.
     pub fn from_name(s: &str) -> Option<Self> {
         match s {
             "height" | "z" => Some(ColorBy::Height),
@@ -33,6 +36,7 @@ impl ColorBy {
             "class" | "classification" => Some(ColorBy::Class),
             "return" | "returns" => Some(ColorBy::Return),
             "strip" | "line" | "source" => Some(ColorBy::Strip),
+            "time" | "gps_time" => Some(ColorBy::Time),
             _ => None,
         }
     }
@@ -213,6 +217,16 @@ impl Palette {
         match by {
             ColorBy::Height => Self::robust(by, points.map(|p| p.z)),
             ColorBy::Intensity => Self::robust(by, points.map(|p| f64::from(p.intensity))),
+            ColorBy::Time => {
+                let (lo, hi) = points.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                    (lo.min(p.gps_time_s), hi.max(p.gps_time_s))
+                });
+                if lo.is_finite() && hi > lo {
+                    Self::bar(by, (lo, hi))
+                } else {
+                    Self::bar(by, (lo.min(0.0), lo.max(0.0) + 1.0))
+                }
+            }
             ColorBy::Class => {
                 let mut classes: Vec<u8> = points.map(|p| p.classification).collect();
                 classes.sort_unstable();
@@ -269,6 +283,7 @@ impl Palette {
         match self.by {
             ColorBy::Height => ramp(scale(p.z)),
             ColorBy::Intensity => ramp(scale(f64::from(p.intensity))),
+            ColorBy::Time => ramp(scale(p.gps_time_s)),
             ColorBy::Class => class_color(p.classification).0,
             ColorBy::Return => return_color(p).0,
             ColorBy::Strip => strip_color(p.source),
@@ -295,11 +310,11 @@ impl Palette {
     /// Draws the legend or colour bar in the panel starting at `x0`.
     pub(super) fn draw(&self, img: &mut Image, x0: usize, top: usize, bottom: usize) {
         let below = match self.by {
-            ColorBy::Height | ColorBy::Intensity => {
-                let title = self.title.unwrap_or(if self.by == ColorBy::Height {
-                    "HEIGHT"
-                } else {
-                    "INTENSITY"
+            ColorBy::Height | ColorBy::Intensity | ColorBy::Time => {
+                let title = self.title.unwrap_or(match self.by {
+                    ColorBy::Height => "HEIGHT",
+                    ColorBy::Time => "GPS TIME S",
+                    _ => "INTENSITY",
                 });
                 img.text(x0, top + 4, title, INK);
                 let (y0, y1) = (top + 24, bottom.saturating_sub(44).max(top + 64));
@@ -348,6 +363,20 @@ impl Palette {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Coloured by time, the first point takes the ramp's first colour and
+    /// the last its last, whatever their heights.
+    #[test]
+    fn time_colours_run_from_the_first_point_to_the_last() {
+        let mut a = crate::render::testing::pt(0.0, 0.0, 9.0, 2);
+        let mut b = crate::render::testing::pt(1.0, 0.0, 1.0, 2);
+        (a.gps_time_s, b.gps_time_s) = (100.0, 100.5);
+        let p = Palette::new([a, b].iter(), ColorBy::Time);
+        assert_eq!(p.range(), (100.0, 100.5));
+        assert_eq!(p.color(&a), ramp(0.0));
+        assert_eq!(p.color(&b), ramp(1.0));
+        assert_eq!(ColorBy::from_name("time"), Some(ColorBy::Time));
+    }
 
     #[test]
     fn bar_labels_are_never_negative_zero() {

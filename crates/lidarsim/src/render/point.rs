@@ -20,4 +20,7 @@ pub struct RenderPoint {
     pub number_of_returns: u8,
     /// Point source ID (flight line).
     pub source: u16,
+    /// GPS time, s (0 where the picture does not show it: the report's
+    /// cross-section).
+    pub gps_time_s: f64,
 }

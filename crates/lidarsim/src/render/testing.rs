@@ -13,6 +13,7 @@ pub(super) fn pt(x: f64, y: f64, z: f64, class: u8) -> RenderPoint {
         return_number: 1,
         number_of_returns: 1,
         source: 1,
+        gps_time_s: 0.0,
     }
 }
 

@@ -139,6 +139,7 @@ impl PointSink for ReportSink {
                     return_number: p.return_number,
                     number_of_returns: p.number_of_returns,
                     source: p.point_source_id,
+                    gps_time_s: 0.0,
                 });
             }
         }

@@ -107,6 +107,7 @@ impl ReportSink {
                 return_number: r.u8()?,
                 number_of_returns: r.u8()?,
                 source: r.u16()?,
+                gps_time_s: 0.0,
             });
         }
         let (flag, line, pulse, n) = (r.u8()?, r.u32()?, r.u64()?, r.u8()?);
