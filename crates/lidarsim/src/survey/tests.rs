@@ -160,3 +160,22 @@ fn bad_polygons_are_reported() {
     assert!(d[0].message.contains("not planar"), "{}", d[0].message);
     assert_eq!(d[0].line, 13);
 }
+
+/// Deflector keys: those of another kind are named as such, and a polygon
+/// without a field of view is refused.
+#[test]
+fn deflector_keys_belong_to_their_kind() {
+    let d = diagnostics(&format!("[scanner]\nfacets = 6\n{MINIMAL}"));
+    assert_eq!(d[0].key, "scanner.facets");
+    assert!(
+        d[0].message.contains("deflector = \"polygon\""),
+        "{}",
+        d[0].message
+    );
+    let d = diagnostics(&format!(
+        "[scanner]\ndeflector = \"polygon\"\nscan_angle_deg = 0\n{MINIMAL}"
+    ));
+    assert_eq!(d[0].key, "scanner.scan_angle_deg");
+    let d = diagnostics(&format!("[scanner]\ndeflector = \"risley\"\n{MINIMAL}"));
+    assert_eq!(d[0].key, "scanner.prism_deviation_deg");
+}

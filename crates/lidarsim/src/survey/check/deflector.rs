@@ -102,6 +102,13 @@ pub(crate) fn deflector(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f
     match kind {
         "polygon" => {
             let facets = c.count(sp.key("facets"), s.facets, 4, 2, 64) as u32;
+            if scan_angle_deg == 0.0 {
+                c.err(
+                    sp.key("scan_angle_deg"),
+                    "must be above 0 for a polygon: pulses leave only while a facet looks \
+                     within ±scan_angle_deg, and a polygon with no field of view fires none",
+                );
+            }
             let sweep_half_deg = 360.0 / f64::from(facets);
             if scan_angle_deg > sweep_half_deg {
                 c.err(
