@@ -93,6 +93,9 @@ pub struct Simulator<'a> {
     boresight: DMat3,
     /// True when no navigation or measurement error is configured.
     exact_georeferencing: bool,
+    /// Mounting rotation of each channel of a multi-channel head; empty
+    /// for the single straight channel of most scanners.
+    mounts: Vec<DMat3>,
 }
 
 impl<'a> Simulator<'a> {
@@ -116,6 +119,10 @@ impl<'a> Simulator<'a> {
             canopy: survey.canopy,
             boresight: survey.navigation.boresight(),
             exact_georeferencing: survey.navigation.is_zero(),
+            mounts: match survey.scanner.channels.as_slice() {
+                [c] if *c == crate::sensor::channel::Channel::STRAIGHT => Vec::new(),
+                channels => channels.iter().map(|c| c.mount()).collect(),
+            },
             receiver,
             detector,
             time_offset_s: survey.output.gps_start_time_s.unwrap_or(0.0),

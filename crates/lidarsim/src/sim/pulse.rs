@@ -27,7 +27,7 @@ use crate::rng::{Purpose, Stream};
 use crate::scene::{Shape, SurfaceClass};
 use crate::sensor::Pose;
 use crate::sensor::beam::{BeamPattern, FINE_PER_CELL};
-use crate::sensor::channel::{Channel, channel_of};
+use crate::sensor::channel::channel_of;
 use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
 use crate::waveform::Return;
@@ -43,6 +43,8 @@ struct Emission {
     /// The channel that fired, and its mounting (`None`: a single
     /// straight channel).
     channel: (u8, Option<DMat3>),
+    /// Beam direction in the scanner frame, the mounting included.
+    beam: DVec3,
     /// Body-to-world rotation of the true attitude.
     body: DMat3,
     /// The scanner's position: the pose's plus the lever arm.
@@ -147,12 +149,11 @@ impl Simulator<'_> {
         let origin = pose.position_m + body * s.navigation.lever_arm_m;
         // The deflection's third column is the beam direction; a channel of
         // a multi-channel head turns it by its mounting.
-        let channels = &s.scanner.channels;
-        let channel = if channels.len() == 1 && channels[0] == Channel::STRAIGHT {
+        let channel = if self.mounts.is_empty() {
             (0, None)
         } else {
-            let c = channel_of(k, channels.len());
-            (c as u8, Some(channels[c].mount()))
+            let c = channel_of(k, self.mounts.len());
+            (c as u8, Some(self.mounts[c]))
         };
         let deflection = match channel.1 {
             Some(mount) => mount * deflector.beam_frame(t),
@@ -163,6 +164,7 @@ impl Simulator<'_> {
             t,
             pose,
             channel,
+            beam: deflection.z_axis,
             body,
             origin,
             central: rot * deflection.z_axis,
@@ -365,9 +367,13 @@ impl Simulator<'_> {
                     * measure
                         .get_or_insert_with(|| stream(Purpose::Measurement))
                         .normal();
-                deflector.observed_direction(t, error)
+                let observed = deflector.observed_direction(t, error);
+                match em.channel.1 {
+                    Some(mount) => mount * observed,
+                    None => observed,
+                }
             } else {
-                deflector.direction_at(t)
+                em.beam
             };
             // Without attitude errors the observed rotation is the true one,
             // to the bit: no need to compute it again.
@@ -380,10 +386,6 @@ impl Simulator<'_> {
                 obs.attitude.body_to_world()
             };
             // `Attitude::scanner_to_world` from that rotation.
-            let beam_obs = match em.channel.1 {
-                Some(mount) => mount * beam_obs,
-                None => beam_obs,
-            };
             let dir = obs_body * SCANNER_TO_LEVEL_NORTH * beam_obs;
             (obs.position_m, obs_body, dir)
         };

@@ -178,4 +178,15 @@ fn deflector_keys_belong_to_their_kind() {
     assert_eq!(d[0].key, "scanner.scan_angle_deg");
     let d = diagnostics(&format!("[scanner]\ndeflector = \"risley\"\n{MINIMAL}"));
     assert_eq!(d[0].key, "scanner.prism_deviation_deg");
+    let d = diagnostics(&format!(
+        "[scanner]\ndeflector = \"risley\"\nscan_angle_deg = 30\nprism_deviation_deg = [10, 10]\n\
+         rotor_frequency_hz = [100, -60]\n{MINIMAL}"
+    ));
+    assert_eq!(d.len(), 1);
+    assert_eq!(d[0].key, "scanner.scan_angle_deg");
+    assert!(
+        d[0].message.contains("prisms set the field of view"),
+        "{}",
+        d[0].message
+    );
 }

@@ -29,8 +29,8 @@ pub(crate) fn deflector(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f
             "oscillating"
         }
     };
-    // Keys that belong to other kinds.
-    let only = [
+    // Keys that belong to one kind only.
+    let owned = [
         ("mirror", s.mirror.is_some(), "oscillating"),
         ("facets", s.facets.is_some(), "polygon"),
         (
@@ -49,31 +49,40 @@ pub(crate) fn deflector(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f
             "risley",
         ),
         ("fibres", s.fibres.is_some(), "fibre"),
-        (
-            "scan_angle_deg",
-            s.scan_angle_deg.is_some() && kind == "risley",
-            "a deflector other than risley (the prisms set the field of view)",
-        ),
-        (
-            "scan_frequency_hz",
-            s.scan_frequency_hz.is_some() && kind == "risley",
-            "a deflector other than risley (the rotors set the pattern)",
-        ),
     ];
-    for (key, given, owner) in only {
-        if given && (owner.contains(' ') || owner != kind) {
-            let owner = if owner.contains(' ') {
-                owner.to_string()
-            } else {
-                format!("deflector = \"{owner}\"")
-            };
+    for (key, given, owner) in owned {
+        if given && owner != kind {
             c.err(
                 sp.key(key),
-                format!("applies only to {owner}; this scanner's deflector is \"{kind}\""),
+                format!(
+                    "applies only to deflector = \"{owner}\"; this scanner's deflector is \
+                     \"{kind}\""
+                ),
             );
         }
     }
+    // Keys every kind but the Risley prisms uses.
     if kind == "risley" {
+        let unused = [
+            (
+                "scan_angle_deg",
+                s.scan_angle_deg.is_some(),
+                "the prisms set the field of view",
+            ),
+            (
+                "scan_frequency_hz",
+                s.scan_frequency_hz.is_some(),
+                "the rotors set the pattern",
+            ),
+        ];
+        for (key, given, why) in unused {
+            if given {
+                c.err(
+                    sp.key(key),
+                    format!("does not apply to deflector = \"risley\": {why}"),
+                );
+            }
+        }
         return Deflector::Risley(risley(c, s, sp, prf_hz));
     }
     let freq_key = sp.key("scan_frequency_hz");
