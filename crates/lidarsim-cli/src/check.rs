@@ -62,6 +62,15 @@ fn check(survey: &Survey, world: &World, output: &Path) {
             say!("  set by the preset:  scanner.{k}");
         }
     }
+    if let Some(u) = &survey.platform_preset {
+        let pr = u.preset;
+        say!("platform:             {} (preset {})", pr.name, pr.id);
+        say!("  source:             {}", pr.source);
+        say!("  not modelled:       {}", pr.note);
+        for k in &u.set {
+            say!("  set by the preset:  platform.{k}");
+        }
+    }
     say!("pulses:               {}", p.pulses);
     say!("flight time:          {:.1} s", p.flight_time_s);
     say!("swath width:          {:.1} m", p.swath_width_m);

@@ -143,7 +143,9 @@ pub fn plan(survey: &Survey, world: &World) -> Plan {
 ///   time `1/PRF` between pulses, so that a real receiver could not tell
 ///   which pulse an echo belongs to without multiple-time-around processing;
 /// * swaths that miss the scene's bounding box (no pulse of that line can
-///   hit anything), for some lines or for all of them.
+///   hit anything), for some lines or for all of them;
+/// * with a platform preset, lines faster or higher above the ground than
+///   that aircraft flies.
 pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
     let caster = world.index();
     let s = &survey.scanner;
@@ -165,6 +167,14 @@ pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
             continue;
         }
         let h = lp.height_above_ground_m;
+        if let Some(u) = &survey.platform_preset {
+            out.extend(crate::survey::platform_preset::limits(
+                u.preset,
+                n as usize,
+                line.speed_mps,
+                h,
+            ));
+        }
         let edge = h / theta.cos();
         if h > 0.0 && h < s.min_range_m {
             out.push(format!(

@@ -175,3 +175,78 @@ fn keys_override_the_preset_and_limits_are_warned() {
         "{e}"
     );
 }
+
+/// `[platform] preset = "uav"`: the multicopter's sway and drift stay
+/// within the figures of its sources (±1.9° roll and pitch, ±0.1 m off the
+/// line, DJI's hovering accuracy with RTK) and reach a good part of them,
+/// its turns take 7 s, and a line faster or higher than such a drone flies
+/// is warned.
+#[test]
+fn the_uav_platform_sways_drifts_and_warns_within_its_sources() {
+    let text = |v: f64, h: f64| {
+        format!(
+            r#"
+[platform]
+preset = "uav"
+[[flight_line]]
+start_m = [0.0, -100.0, {h}]
+end_m = [0.0, 100.0, {h}]
+speed_mps = {v}
+[[flight_line]]
+start_m = [20.0, 100.0, {h}]
+end_m = [20.0, -100.0, {h}]
+speed_mps = {v}
+[materials.g]
+reflectance = 0.3
+[[polygon]]
+material = "g"
+class = "ground"
+vertices_m = [[-500, -500, 0], [500, -500, 0], [500, 500, 0], [-500, 500, 0]]
+"#
+        )
+    };
+    let s = Survey::from_toml(&text(5.0, 60.0), None).unwrap();
+    let w = World::build(&s).unwrap();
+    let p = plan(&s, &w);
+    close(
+        p.flight_time_s,
+        2.0 * 200.0 / 5.0 + 7.0,
+        1e-9,
+        "flight time",
+    );
+    assert!(lidarsim::plan::warnings(&s, &w, &p).is_empty());
+    let line = &w.lines[0];
+    let (mut max_roll, mut max_pitch, mut max_off) = (0.0f64, 0.0f64, 0.0f64);
+    let n = 4000;
+    for k in 0..=n {
+        let t = line.duration_s() * f64::from(k) / f64::from(n);
+        let pose = line.pose_at(t);
+        max_roll = max_roll.max(pose.attitude.roll_rad.abs().to_degrees());
+        max_pitch = max_pitch.max(pose.attitude.pitch_rad.abs().to_degrees());
+        max_off = max_off
+            .max(pose.position_m.x.abs())
+            .max((pose.position_m.z - 60.0).abs());
+    }
+    assert!((0.5..=1.9 + 1e-9).contains(&max_roll), "roll {max_roll}");
+    assert!((0.5..=1.9 + 1e-9).contains(&max_pitch), "pitch {max_pitch}");
+    assert!(
+        (0.02..=0.1 + 1e-9).contains(&max_off),
+        "off the line {max_off}"
+    );
+
+    let s = Survey::from_toml(&text(30.0, 150.0), None).unwrap();
+    let w = World::build(&s).unwrap();
+    let warned = lidarsim::plan::warnings(&s, &w, &plan(&s, &w));
+    for (want, line) in [
+        ("30 m/s", 1),
+        ("150.0 m above the ground", 1),
+        ("30 m/s", 2),
+    ] {
+        assert!(
+            warned
+                .iter()
+                .any(|m| m.contains(want) && m.contains(&format!("flight line {line}"))),
+            "{want} on line {line}: {warned:?}"
+        );
+    }
+}

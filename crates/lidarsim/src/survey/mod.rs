@@ -11,6 +11,7 @@
 mod check;
 mod diagnostic;
 mod locate;
+pub mod platform_preset;
 pub mod preset;
 pub mod raw;
 mod read;
@@ -188,6 +189,8 @@ pub struct Survey {
     pub warnings: Vec<String>,
     /// The instrument preset `[scanner] preset` named, and what it set.
     pub preset: Option<preset::PresetUse>,
+    /// The platform preset `[platform] preset` named, and what it set.
+    pub platform_preset: Option<platform_preset::PlatformPresetUse>,
     /// What to write.
     pub output: OutputSettings,
     /// The survey's materials by name.
@@ -345,6 +348,7 @@ impl Survey {
             navigation,
             warnings,
             preset: sensor.preset,
+            platform_preset: platform.preset,
             output,
             materials: materials.0,
             scene_spec,

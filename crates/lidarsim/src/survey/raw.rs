@@ -155,6 +155,7 @@ pub struct RawReceiver {
 #[serde(deny_unknown_fields)]
 #[allow(missing_docs)]
 pub struct RawPlatform {
+    pub preset: Option<String>,
     pub sway: Option<bool>,
     pub drift_m: Option<Vec<f64>>,
     pub drift_period_s: Option<f64>,

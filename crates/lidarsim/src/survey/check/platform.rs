@@ -2,7 +2,9 @@
 //! lines.
 
 use super::Checker;
+use crate::message::edit_distance;
 use crate::sensor::platform::SwayConfig;
+use crate::survey::platform_preset::{self, PlatformPresetUse};
 use crate::survey::{KeyPath, MAX_SWAY_FREQUENCIES, RawSurvey};
 
 /// The checked `[platform]` (its lines are [`super::lines`]').
@@ -11,14 +13,42 @@ pub(crate) struct Platform {
     pub turn_time_s: f64,
     /// Peak lateral and vertical drift, m, and its period, s.
     pub drift: Option<([f64; 2], f64)>,
+    /// The platform preset and the keys it set.
+    pub preset: Option<PlatformPresetUse>,
 }
 
 /// Checks `[platform]`.
 pub(crate) fn platform(c: &mut Checker, raw: &RawSurvey) -> Platform {
     let root = KeyPath::root();
     // [platform]
-    let p = &raw.platform;
     let pp = root.key("platform");
+    let (applied, preset) = match raw.platform.preset.as_deref() {
+        None => (None, None),
+        Some(id) => match platform_preset::find(id) {
+            Some(p) => {
+                let (merged, set) = platform_preset::apply(p, &raw.platform);
+                (Some(merged), Some(PlatformPresetUse { preset: p, set }))
+            }
+            None => {
+                let ids: Vec<&str> = platform_preset::PLATFORM_PRESETS
+                    .iter()
+                    .map(|p| p.id)
+                    .collect();
+                let near = ids
+                    .iter()
+                    .min_by_key(|p| edit_distance(p, id))
+                    .filter(|p| edit_distance(p, id) <= 3)
+                    .map(|p| format!(" (did you mean \"{p}\"?)"))
+                    .unwrap_or_default();
+                c.err(
+                    pp.key("preset"),
+                    format!("unknown platform '{id}'{near}; presets: {}", ids.join(", ")),
+                );
+                (None, None)
+            }
+        },
+    };
+    let p = applied.as_ref().unwrap_or(&raw.platform);
     let sway_on = p.sway.unwrap_or(false);
     let d = SwayConfig::default();
     let roll = c.number(
@@ -102,5 +132,6 @@ pub(crate) fn platform(c: &mut Checker, raw: &RawSurvey) -> Platform {
         sway,
         turn_time_s,
         drift: drift.map(|d| (d, drift_period_s)),
+        preset,
     }
 }
