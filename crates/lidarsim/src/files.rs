@@ -150,23 +150,33 @@ pub fn digitizer(survey: &Survey, world: &World) -> crate::output::Digitizer {
     )
 }
 
-/// Writes the trajectory, one row per `trajectory_interval_s` of each
-/// flight line: time (in the points' time base), position, attitude in
-/// degrees, line number. `observed` selects the trajectory the GNSS/IMU
-/// measured (biases and correlated errors; the per-pulse white noise is not
-/// in it) instead of the one flown.
-pub fn write_trajectory(
+/// One row of a trajectory: the scanner's pose at one time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TrajectoryRow {
+    /// Time in the points' time base (GPS time when `gps_start_time_s` is
+    /// set), s.
+    pub gps_time_s: f64,
+    /// Position in output coordinates (`[output] offset_m` added), m.
+    pub position_m: crate::geometry::DVec3,
+    /// Roll, pitch and yaw, degrees.
+    pub attitude_deg: [f64; 3],
+    /// Flight line number, 1 for the first.
+    pub line: u32,
+}
+
+/// The trajectory, one row per `trajectory_interval_s` of each flight
+/// line. `observed` selects the trajectory the GNSS/IMU measured (biases
+/// and correlated errors; the per-pulse white noise is not in it) instead
+/// of the one flown.
+pub fn trajectory_rows(
     survey: &Survey,
     lines: &[FlightLine],
-    path: &Path,
     observed: bool,
-) -> io::Result<()> {
-    let mut f = AtomicFile::create(path)?;
+) -> Vec<TrajectoryRow> {
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
     let dt = survey.output.trajectory_interval_s;
     let origin = survey.output.offset_m;
-    let w = f.writer();
-    writeln!(w, "gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line")?;
+    let mut rows = Vec::new();
     for line in lines {
         let n = (line.duration_s() / dt).floor() as u64;
         for j in 0..=n {
@@ -177,19 +187,45 @@ pub fn write_trajectory(
             } else {
                 truth
             };
-            writeln!(
-                w,
-                "{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}",
-                offset + line.start_time_s + t,
-                p.position_m.x + origin.x,
-                p.position_m.y + origin.y,
-                p.position_m.z + origin.z,
-                p.attitude.roll_rad.to_degrees(),
-                p.attitude.pitch_rad.to_degrees(),
-                p.attitude.yaw_rad.to_degrees(),
-                line.index + 1
-            )?;
+            rows.push(TrajectoryRow {
+                gps_time_s: offset + line.start_time_s + t,
+                position_m: p.position_m + origin,
+                attitude_deg: [
+                    p.attitude.roll_rad.to_degrees(),
+                    p.attitude.pitch_rad.to_degrees(),
+                    p.attitude.yaw_rad.to_degrees(),
+                ],
+                line: line.index + 1,
+            });
         }
+    }
+    rows
+}
+
+/// Writes [`trajectory_rows`] as CSV: time, position, attitude in degrees,
+/// line number.
+pub fn write_trajectory(
+    survey: &Survey,
+    lines: &[FlightLine],
+    path: &Path,
+    observed: bool,
+) -> io::Result<()> {
+    let mut f = AtomicFile::create(path)?;
+    let w = f.writer();
+    writeln!(w, "gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line")?;
+    for r in trajectory_rows(survey, lines, observed) {
+        writeln!(
+            w,
+            "{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}",
+            r.gps_time_s,
+            r.position_m.x,
+            r.position_m.y,
+            r.position_m.z,
+            r.attitude_deg[0],
+            r.attitude_deg[1],
+            r.attitude_deg[2],
+            r.line
+        )?;
     }
     f.commit()
 }

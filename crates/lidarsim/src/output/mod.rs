@@ -15,7 +15,7 @@ mod xyz;
 
 pub use las::{
     Digitizer, LasSettings, LasWriter, POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN, WAVEFORM_BITS,
-    WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN,
+    WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN, return_numbers, scan_angle_units,
 };
 pub use ply::{PLY_PROPERTIES, PLY_RECORD_LEN, PlyWriter};
 pub use xyz::XyzWriter;

@@ -83,7 +83,51 @@ pub struct LasSettings {
     pub waveform_file_shared: bool,
 }
 
+/// A point's return number and number of returns as LAS stores them
+/// (each 1 to 15).
+pub fn return_numbers(p: &PointRecord) -> (u8, u8) {
+    (
+        p.return_number.clamp(1, 15),
+        p.number_of_returns.clamp(1, 15),
+    )
+}
+
+/// A scan angle in the LAS 1.4 field's units of 0.006°, −30 000 to 30 000.
+pub fn scan_angle_units(deg: f64) -> i16 {
+    (deg / 0.006).round().clamp(-30_000.0, 30_000.0) as i16
+}
+
 impl LasSettings {
+    /// The X, Y and Z integers stored for a point at `position_m` (world
+    /// metres; `origin_m` is added first): `round((v − offset) / scale)`.
+    /// Reading them back as `X · scale + offset` gives the file's
+    /// coordinates.
+    pub fn quantize_point(&self, position_m: crate::geometry::DVec3) -> io::Result<[i32; 3]> {
+        let o = self.origin_m;
+        Ok([
+            self.quantize(position_m.x + o[0], 0)?,
+            self.quantize(position_m.y + o[1], 1)?,
+            self.quantize(position_m.z + o[2], 2)?,
+        ])
+    }
+
+    /// One output coordinate `v` (m, after `origin_m`) on `axis` as the
+    /// stored integer; an error when it does not fit in an i32.
+    pub fn quantize(&self, v: f64, axis: usize) -> io::Result<i32> {
+        let q = ((v - self.offset_m[axis]) / self.scale_m).round();
+        if q.is_finite() && q >= i32::MIN as f64 && q <= i32::MAX as f64 {
+            Ok(q as i32)
+        } else {
+            Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "coordinate {v} m cannot be stored with offset {} m and scale {} m",
+                    self.offset_m[axis], self.scale_m
+                ),
+            ))
+        }
+    }
+
     /// The point data record format: 6, or 9 with waveforms.
     pub fn point_format(&self) -> u8 {
         if self.waveform.is_some() { 9 } else { 6 }
@@ -283,8 +327,14 @@ impl LasWriter {
             for a in 0..3 {
                 // Header bounds are integers × scale + offset: exact inverse.
                 let (max, min) = (f64_at(179 + 16 * a), f64_at(187 + 16 * a));
-                w.max[a] = w.quantize(max, a).map_err(|e| bad(e.to_string()))?;
-                w.min[a] = w.quantize(min, a).map_err(|e| bad(e.to_string()))?;
+                w.max[a] = w
+                    .settings
+                    .quantize(max, a)
+                    .map_err(|e| bad(e.to_string()))?;
+                w.min[a] = w
+                    .settings
+                    .quantize(min, a)
+                    .map_err(|e| bad(e.to_string()))?;
             }
         }
         // Only now, with everything checked, are the files touched.
@@ -343,21 +393,6 @@ impl LasWriter {
             wdp_file = Some((file, wdp.path));
         }
         Ok((self.file, wdp_file))
-    }
-
-    fn quantize(&self, v: f64, axis: usize) -> io::Result<i32> {
-        let q = ((v - self.settings.offset_m[axis]) / self.settings.scale_m).round();
-        if q.is_finite() && q >= i32::MIN as f64 && q <= i32::MAX as f64 {
-            Ok(q as i32)
-        } else {
-            Err(io::Error::new(
-                io::ErrorKind::InvalidData,
-                format!(
-                    "coordinate {v} m cannot be stored with offset {} m and scale {} m",
-                    self.settings.offset_m[axis], self.settings.scale_m
-                ),
-            ))
-        }
     }
 
     /// The 375-byte public header block (LAS 1.4 R15, Table 3).
@@ -452,17 +487,12 @@ impl LasWriter {
         let mut cursor = 0;
         // (pulse key, wave packet fields) of the packet last written.
         let mut current: Option<((u16, u64), WavePacketLink)> = None;
-        let o = self.settings.origin_m;
         // The buffer takes the points' records whole (an `extend` per field
         // costs a capacity check and a length update each).
         self.buf
             .reserve(points.len() * usize::from(self.settings.record_len()));
         for p in points {
-            let xyz = [
-                self.quantize(p.position_m.x + o[0], 0)?,
-                self.quantize(p.position_m.y + o[1], 1)?,
-                self.quantize(p.position_m.z + o[2], 2)?,
-            ];
+            let xyz = self.settings.quantize_point(p.position_m)?;
             // The 30 bytes of point data record format 6 (LAS 1.4 R15,
             // Table 16).
             let mut rec = [0u8; POINT_FORMAT_6_LEN as usize];
@@ -472,8 +502,7 @@ impl LasWriter {
                 rec[4 * a..4 * a + 4].copy_from_slice(&q.to_le_bytes());
             }
             rec[12..14].copy_from_slice(&p.intensity.to_le_bytes());
-            let rn = p.return_number.clamp(1, 15);
-            let nr = p.number_of_returns.clamp(1, 15);
+            let (rn, nr) = return_numbers(p);
             rec[14] = rn | (nr << 4);
             // Classification flags 0, the scanner channel (bits 4–5), the
             // scan direction flag (bit 6) and edge of flight line (bit 7).
@@ -483,9 +512,7 @@ impl LasWriter {
             rec[16] = p.classification;
             rec[17] = p.component; // user data: what returned the echo
             // Scan angle in 0.006° increments, −30 000 … +30 000.
-            let sa = (p.scan_angle_deg / 0.006)
-                .round()
-                .clamp(-30_000.0, 30_000.0) as i16;
+            let sa = scan_angle_units(p.scan_angle_deg);
             rec[18..20].copy_from_slice(&sa.to_le_bytes());
             rec[20..22].copy_from_slice(&p.point_source_id.to_le_bytes());
             rec[22..30].copy_from_slice(&p.gps_time_s.to_le_bytes());
