@@ -1,0 +1,341 @@
+"""lidarsim: airborne LiDAR simulation from Python.
+
+Build a survey from a file, TOML text or a dict (the keys of the survey
+file, described in ``docs/survey.md``), run it, and get the points as a
+NumPy structured array with the fields of the LAS file::
+
+    import lidarsim
+    survey = lidarsim.Survey.load("examples/forest.toml")
+    result = survey.run()
+    result.points["z"], result.points["classification"]
+    las = result.to_laspy()            # needs laspy
+    survey.run_to("out")               # the files of `lidarsim run`
+
+A survey with problems raises :class:`SurveyError`, whose message names
+every key at fault. The simulation runs with the GIL released on every
+core; Ctrl-C raises ``KeyboardInterrupt`` within a block of pulses.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import sys
+from pathlib import Path
+from typing import Any, Callable, Dict, Mapping, Optional, Union
+
+import numpy as np
+
+from . import _lidarsim
+from ._lidarsim import SurveyError
+
+__all__ = [
+    "POINT_DTYPE",
+    "TRAJECTORY_DTYPE",
+    "Result",
+    "Survey",
+    "SurveyError",
+    "__version__",
+]
+
+__version__: str = _lidarsim.VERSION
+
+#: The fields of a point: laspy's dimension names where laspy has one,
+#: the LAS file's extra-byte names otherwise, and ``pulse_index`` (the
+#: pulse within its flight line, not in the LAS file).
+POINT_DTYPE = np.dtype(list(_lidarsim.POINT_FIELDS))
+assert POINT_DTYPE.itemsize == _lidarsim.POINT_RECORD_BYTES
+
+#: The fields of a trajectory row: GPS time (s), position (m), roll, pitch
+#: and yaw (degrees), flight line (1 for the first).
+TRAJECTORY_DTYPE = np.dtype(list(_lidarsim.TRAJECTORY_FIELDS))
+
+PathLike = Union[str, "os.PathLike[str]"]
+Progress = Union[bool, Callable[[int, int], Any], None]
+
+
+def _threads(threads: Optional[int]) -> int:
+    if threads is None:
+        return os.cpu_count() or 1
+    if threads < 1:
+        raise ValueError(f"threads must be at least 1, got {threads}")
+    return int(threads)
+
+
+class _Bar:
+    """A progress display: tqdm (terminal or notebook) when it is installed,
+    else one line on stderr rewritten in place."""
+
+    def __init__(self, label: str) -> None:
+        self.label = label
+        self.bar = None
+        self.shown = False
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.bar is None:
+            try:
+                from tqdm.auto import tqdm
+
+                self.bar = tqdm(total=total, unit=" pulses", unit_scale=True, desc=self.label)
+            except ImportError:
+                self.bar = False
+        if self.bar:
+            self.bar.update(done - self.bar.n)
+        else:
+            pct = 100.0 * done / total if total else 100.0
+            sys.stderr.write(f"\r{self.label}: {done}/{total} pulses ({pct:.0f} %)")
+            sys.stderr.flush()
+            self.shown = True
+
+    def close(self) -> None:
+        if self.bar:
+            self.bar.close()
+        elif self.shown:
+            sys.stderr.write("\n")
+
+
+def _progress(progress: Progress, label: str):
+    """The callback for ``progress`` and the display to close afterwards."""
+    if progress is True:
+        bar = _Bar(label)
+        return bar, bar
+    if progress in (False, None):
+        return None, None
+    if callable(progress):
+        return progress, None
+    raise TypeError("progress must be True, False or a callable(done, total)")
+
+
+def _merge(base: Dict[str, Any], changes: Mapping[str, Any]) -> Dict[str, Any]:
+    """``base`` with ``changes`` merged in: tables key by key, other values
+    replaced; a value of None removes the key."""
+    out = copy.deepcopy(base)
+    for key, value in changes.items():
+        if value is None:
+            out.pop(key, None)
+        elif isinstance(value, Mapping) and isinstance(out.get(key), dict):
+            out[key] = _merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+class Survey:
+    """A checked survey: scanner, platform, flight lines, scene and outputs.
+
+    Make one with :meth:`load`, :meth:`from_toml`, :meth:`from_dict` or
+    :meth:`demo`; change settings with :meth:`replace` (a new, re-checked
+    survey). The scene is built and indexed once, on the first run.
+    """
+
+    def __init__(self, core: "_lidarsim.SurveyCore") -> None:
+        self._core = core
+
+    @classmethod
+    def load(cls, path: PathLike, seed: Optional[int] = None) -> "Survey":
+        """Reads and checks the survey file at ``path``. ``seed`` replaces
+        the file's seed (every random stream follows it)."""
+        return cls(_lidarsim.SurveyCore.load(os.fspath(path), seed))
+
+    @classmethod
+    def from_toml(
+        cls, text: str, base_dir: Optional[PathLike] = None, seed: Optional[int] = None
+    ) -> "Survey":
+        """Checks a survey given as TOML text. Relative file names in it are
+        found from ``base_dir`` (the working directory by default)."""
+        base = None if base_dir is None else os.fspath(base_dir)
+        return cls(_lidarsim.SurveyCore.from_toml(text, base, seed))
+
+    @classmethod
+    def from_dict(
+        cls,
+        d: Mapping[str, Any],
+        base_dir: Optional[PathLike] = None,
+        seed: Optional[int] = None,
+    ) -> "Survey":
+        """Checks a survey given as a dict with the survey file's keys
+        (tables as dicts, arrays of tables as lists of dicts; NumPy arrays
+        and scalars are accepted as values). Problems name their keys."""
+        base = None if base_dir is None else os.fspath(base_dir)
+        return cls(_lidarsim.SurveyCore.from_dict(dict(d), base, seed))
+
+    @classmethod
+    def demo(cls, seed: Optional[int] = None) -> "Survey":
+        """The built-in demo: a small town with streets, buildings and trees."""
+        return cls(_lidarsim.SurveyCore.demo(seed))
+
+    @property
+    def seed(self) -> int:
+        """The seed of every random stream."""
+        return self._core.seed
+
+    def to_dict(self) -> Dict[str, Any]:
+        """The survey's keys as a dict (seed fixed, file paths absolute):
+        ``Survey.from_dict(s.to_dict())`` is the same survey."""
+        return self._core.to_dict()
+
+    def to_toml(self) -> str:
+        """The survey as TOML text (what a run's ``survey.toml`` holds)."""
+        return self._core.to_toml()
+
+    def replace(self, changes: Mapping[str, Any], seed: Optional[int] = None) -> "Survey":
+        """A new survey with ``changes`` merged into this one's keys, for a
+        parameter sweep::
+
+            higher = survey.replace({"plan": {"altitude_m": 800}})
+
+        Tables merge key by key; other values (arrays of tables such as
+        ``flight_line`` included) are replaced; None removes a key."""
+        return Survey.from_dict(_merge(self.to_dict(), changes), seed=seed)
+
+    def warnings(self) -> list:
+        """Settings that are allowed but probably not meant, each naming its
+        key (builds the scene if it was not built)."""
+        return self._core.warnings()
+
+    def build(self) -> None:
+        """Builds the scene and its index now rather than on the first run."""
+        self._core.build()
+
+    def _with_seed(self, seed: Optional[int]) -> "Survey":
+        return self if seed is None or seed == self.seed else self.replace({}, seed=seed)
+
+    def run(
+        self, threads: Optional[int] = None, seed: Optional[int] = None, progress: Progress = True
+    ) -> "Result":
+        """Simulates every pulse and returns the points in memory.
+
+        ``threads``: cores to use (all by default). ``seed``: run with this
+        seed instead. ``progress``: True for a progress bar, False for none,
+        or a callable ``f(done, total)`` (in pulses)."""
+        survey = self._with_seed(seed)
+        callback, bar = _progress(progress, "simulating")
+        try:
+            raw = survey._core.run(_threads(threads), callback)
+        finally:
+            if bar is not None:
+                bar.close()
+        return Result(
+            points=raw["points"].view(POINT_DTYPE),
+            trajectory={
+                "true": raw["trajectory_true"].view(TRAJECTORY_DTYPE),
+                "observed": raw["trajectory_observed"].view(TRAJECTORY_DTYPE),
+            },
+            summary=raw["summary"],
+            las_header=raw["las"],
+        )
+
+    def run_to(
+        self,
+        out_dir: PathLike,
+        threads: Optional[int] = None,
+        seed: Optional[int] = None,
+        progress: Progress = True,
+        overwrite: bool = False,
+        resume: bool = False,
+        no_space_check: bool = False,
+    ) -> Dict[str, Any]:
+        """Writes the files of ``lidarsim run`` (points, trajectories,
+        report, summary) into ``out_dir`` and returns the summary. Options
+        as the command line's ``--overwrite``, ``--resume`` and
+        ``--no-space-check``. Interrupted by Ctrl-C, the files are kept
+        under ``.partial`` names with a record to resume, and
+        ``KeyboardInterrupt`` is raised."""
+        survey = self._with_seed(seed)
+        callback, bar = _progress(progress, "simulating")
+        try:
+            return survey._core.run_to(
+                os.fspath(out_dir), _threads(threads), callback, overwrite, resume, no_space_check
+            )
+        finally:
+            if bar is not None:
+                bar.close()
+
+
+class Result:
+    """The outcome of :meth:`Survey.run`.
+
+    ``points``: structured array of :data:`POINT_DTYPE`, in pulse order and
+    return order within a pulse. ``trajectory``: ``{"true": ...,
+    "observed": ...}`` arrays of :data:`TRAJECTORY_DTYPE` (the path flown
+    and the one the GNSS/IMU measured). ``summary``: the run's
+    ``summary.json`` as a dict. ``las_header``: the LAS file's scale,
+    offset, CRS and which extra bytes it has.
+    """
+
+    def __init__(
+        self,
+        points: np.ndarray,
+        trajectory: Dict[str, np.ndarray],
+        summary: Dict[str, Any],
+        las_header: Dict[str, Any],
+    ) -> None:
+        self.points = points
+        self.trajectory = trajectory
+        self.summary = summary
+        self.las_header = las_header
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+    def __repr__(self) -> str:
+        return f"<lidarsim.Result: {len(self.points)} points, {self.summary['pulses']} pulses>"
+
+    @property
+    def scan_angle_deg(self) -> np.ndarray:
+        """The scan angle in degrees (``points["scan_angle"]`` is in the LAS
+        field's units of 0.006°)."""
+        return self.points["scan_angle"] * 0.006
+
+    def to_laspy(self):
+        """The points as a ``laspy.LasData`` (point format 6, LAS 1.4) with
+        the LAS file's scale, offset and extra bytes: writing it gives the
+        points of ``points.las``. Needs laspy; the CRS needs pyproj."""
+        import laspy
+
+        p = self.points
+        h = self.las_header
+        header = laspy.LasHeader(point_format=6, version="1.4")
+        header.scales = np.array([h["scale"]] * 3)
+        header.offsets = np.array(h["offset"])
+        extra = []
+        if h["extra_bytes"]:
+            extra += [
+                ("amplitude", np.float32),
+                ("echo_width", np.float32),
+                ("range", np.float32),
+                ("incidence_angle", np.float32),
+                ("object_id", np.uint32),
+            ]
+        if h["error_extra_bytes"]:
+            extra += [("error_x", np.float32), ("error_y", np.float32), ("error_z", np.float32)]
+        if extra:
+            header.add_extra_dims([laspy.ExtraBytesParams(name=n, type=t) for n, t in extra])
+        if h["crs_wkt"]:
+            try:
+                import pyproj
+
+                header.add_crs(pyproj.CRS.from_wkt(h["crs_wkt"]))
+            except ImportError:
+                pass
+        las = laspy.LasData(header)
+        for axis, name in enumerate("XYZ"):
+            stored = np.round((p[name.lower()] - h["offset"][axis]) / h["scale"])
+            setattr(las, name, stored.astype(np.int32))
+        for name in [
+            "intensity",
+            "return_number",
+            "number_of_returns",
+            "scan_direction_flag",
+            "edge_of_flight_line",
+            "scanner_channel",
+            "classification",
+            "user_data",
+            "scan_angle",
+            "point_source_id",
+            "gps_time",
+        ]:
+            las[name] = p[name]
+        for name, _ in extra:
+            las[name] = p[name]
+        return las

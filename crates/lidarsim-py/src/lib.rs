@@ -1,0 +1,41 @@
+//! `lidarsim._lidarsim`, the compiled half of the `lidarsim` Python
+//! package: surveys checked by the library, runs with the GIL released and
+//! Ctrl-C honoured between blocks, points packed into the bytes of a NumPy
+//! structured array. The pure-Python half (`python/lidarsim`) wraps it in
+//! the documented API.
+
+mod convert;
+mod points;
+mod run;
+mod survey;
+
+use pyo3::exceptions::PyImportError;
+use pyo3::prelude::*;
+
+pyo3::create_exception!(
+    _lidarsim,
+    SurveyError,
+    pyo3::exceptions::PyValueError,
+    "A survey with problems: `str(e)` lists every one with its key, \
+     `e.diagnostics` holds them as dicts (file, line, column, key, message, help)."
+);
+
+/// The module: refuses to load on a processor without the instructions the
+/// build targets, as the command line does.
+#[pymodule]
+fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    if let Some(feature) = lidarsim::kernels::cpu::missing() {
+        return Err(PyImportError::new_err(format!(
+            "this build of lidarsim needs a processor with {feature} (x86-64-v3); rebuild it \
+             for this one with RUSTFLAGS=\"-C target-cpu=native\" pip install \
+             ./crates/lidarsim-py"
+        )));
+    }
+    m.add("SurveyError", m.py().get_type::<SurveyError>())?;
+    m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
+    m.add("POINT_FIELDS", points::FIELDS.to_vec())?;
+    m.add("POINT_RECORD_BYTES", points::RECORD_BYTES)?;
+    m.add("TRAJECTORY_FIELDS", points::TRAJECTORY_FIELDS.to_vec())?;
+    m.add_class::<survey::SurveyCore>()?;
+    Ok(())
+}

@@ -1,0 +1,223 @@
+//! `SurveyCore`: a checked survey and, once built, its world.
+
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+use lidarsim::{Survey, World};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::SurveyError;
+use crate::convert::{from_toml, to_toml};
+
+/// A checked survey (the `lidarsim.Survey` wrapper holds one).
+#[pyclass(module = "lidarsim._lidarsim", frozen)]
+pub struct SurveyCore {
+    pub(crate) survey: Arc<Survey>,
+    world: Mutex<Option<Arc<World>>>,
+    /// Whether its text was made from a dict (its lines then mean nothing
+    /// to the user, and errors show keys only).
+    from_dict: bool,
+}
+
+/// The library's survey error as `SurveyError`: the message lists every
+/// problem; `diagnostics` holds them as dicts. `keys_only` leaves out the
+/// file, line and source text (for surveys given as dicts).
+pub fn survey_error(py: Python<'_>, e: &lidarsim::survey::SurveyError, keys_only: bool) -> PyErr {
+    let message = if keys_only {
+        e.diagnostics
+            .iter()
+            .map(|d| match &d.help {
+                Some(h) => format!("key `{}`: {} (help: {h})", d.key, d.message),
+                None => format!("key `{}`: {}", d.key, d.message),
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    } else {
+        e.to_string()
+    };
+    let err = SurveyError::new_err(message);
+    let list = PyList::empty(py);
+    for d in &e.diagnostics {
+        let item = PyDict::new(py);
+        let _ = item.set_item("file", (!keys_only).then_some(&d.file));
+        let _ = item.set_item("line", (!keys_only && d.line > 0).then_some(d.line));
+        let _ = item.set_item("column", (!keys_only && d.column > 0).then_some(d.column));
+        let _ = item.set_item("key", &d.key);
+        let _ = item.set_item("message", &d.message);
+        let _ = item.set_item("help", d.help.as_deref());
+        let _ = list.append(item);
+    }
+    let _ = err.value(py).setattr("diagnostics", list);
+    err
+}
+
+impl SurveyCore {
+    fn new(survey: Survey, from_dict: bool) -> Self {
+        Self {
+            survey: Arc::new(survey),
+            world: Mutex::new(None),
+            from_dict,
+        }
+    }
+
+    /// The survey's world, built (with the GIL released) on first use.
+    pub(crate) fn world(&self, py: Python<'_>) -> PyResult<Arc<World>> {
+        if let Some(w) = self.world.lock().expect("world lock").as_ref() {
+            return Ok(Arc::clone(w));
+        }
+        let survey = Arc::clone(&self.survey);
+        let built = py.detach(move || World::build(&survey));
+        let world = Arc::new(built.map_err(|e| survey_error(py, &e, self.from_dict))?);
+        *self.world.lock().expect("world lock") = Some(Arc::clone(&world));
+        Ok(world)
+    }
+
+    fn from_text(
+        py: Python<'_>,
+        text: &str,
+        path: &Path,
+        seed: Option<u64>,
+        from_dict: bool,
+    ) -> PyResult<Self> {
+        Survey::from_toml_with_seed(text, Some(path), seed)
+            .map(|s| Self::new(s, from_dict))
+            .map_err(|e| survey_error(py, &e, from_dict))
+    }
+}
+
+/// Where relative file names of a survey given as text or a dict are
+/// found: `base_dir`, else the working directory; `name` stands for the
+/// file in messages.
+fn pseudo_path(base_dir: Option<PathBuf>, name: &str) -> PathBuf {
+    base_dir.unwrap_or_default().join(name)
+}
+
+#[pymethods]
+impl SurveyCore {
+    /// Reads and checks the survey file at `path`; `seed` replaces its
+    /// seed before anything is drawn.
+    #[staticmethod]
+    #[pyo3(signature = (path, seed=None))]
+    fn load(py: Python<'_>, path: PathBuf, seed: Option<u64>) -> PyResult<Self> {
+        Survey::load_with_seed(&path, seed)
+            .map(|s| Self::new(s, false))
+            .map_err(|e| survey_error(py, &e, false))
+    }
+
+    /// Checks a survey given as TOML text.
+    #[staticmethod]
+    #[pyo3(signature = (text, base_dir=None, seed=None))]
+    fn from_toml(
+        py: Python<'_>,
+        text: &str,
+        base_dir: Option<PathBuf>,
+        seed: Option<u64>,
+    ) -> PyResult<Self> {
+        Self::from_text(py, text, &pseudo_path(base_dir, "<string>"), seed, false)
+    }
+
+    /// Checks a survey given as a dict with the survey file's keys.
+    #[staticmethod]
+    #[pyo3(signature = (d, base_dir=None, seed=None))]
+    fn from_dict(
+        py: Python<'_>,
+        d: &Bound<'_, PyDict>,
+        base_dir: Option<PathBuf>,
+        seed: Option<u64>,
+    ) -> PyResult<Self> {
+        let value = to_toml(d.as_any(), "")?.unwrap_or(toml::Value::Table(Default::default()));
+        let text = toml::to_string(&value).map_err(|e| {
+            pyo3::exceptions::PyValueError::new_err(format!("cannot write the survey: {e}"))
+        })?;
+        Self::from_text(py, &text, &pseudo_path(base_dir, "<dict>"), seed, true)
+    }
+
+    /// The built-in demo survey (a town with streets, buildings and trees).
+    #[staticmethod]
+    #[pyo3(signature = (seed=None))]
+    fn demo(py: Python<'_>, seed: Option<u64>) -> PyResult<Self> {
+        let mut raw = lidarsim::demo::demo_survey();
+        if seed.is_some() {
+            raw.seed = seed;
+        }
+        let text = toml::to_string(&raw).expect("the demo survey serialises");
+        Self::from_text(py, &text, Path::new("<demo>"), None, false)
+    }
+
+    /// The survey as a dict of survey-file keys: seed fixed, file paths
+    /// absolute (what `survey.toml` of a run holds).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let raw = lidarsim::files::replayable(&self.survey);
+        let value = toml::Value::try_from(&raw).map_err(|e| {
+            pyo3::exceptions::PyValueError::new_err(format!("cannot read the survey: {e}"))
+        })?;
+        from_toml(py, &value)
+    }
+
+    /// The survey as TOML text (`to_dict` written out).
+    fn to_toml(&self) -> PyResult<String> {
+        toml::to_string(&lidarsim::files::replayable(&self.survey)).map_err(|e| {
+            pyo3::exceptions::PyValueError::new_err(format!("cannot write the survey: {e}"))
+        })
+    }
+
+    /// The seed of every random stream.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.survey.seed
+    }
+
+    /// Warnings about the settings (each names its key), and, once the
+    /// world is built, about the settings over the scene.
+    fn warnings(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        let world = self.world(py)?;
+        let plan = lidarsim::plan::plan(&self.survey, &world);
+        let mut all = world.warnings_with(&self.survey);
+        all.extend(lidarsim::plan::warnings(&self.survey, &world, &plan));
+        Ok(all)
+    }
+
+    /// Builds the scene and index now (otherwise the first run does).
+    fn build(&self, py: Python<'_>) -> PyResult<()> {
+        self.world(py).map(|_| ())
+    }
+
+    /// The run: see `run.rs`.
+    #[pyo3(signature = (threads, progress=None))]
+    fn run<'py>(
+        &self,
+        py: Python<'py>,
+        threads: usize,
+        progress: Option<Py<PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        crate::run::run(py, self, threads, progress)
+    }
+
+    /// A run into a directory: see `run.rs`.
+    #[pyo3(signature = (out_dir, threads, progress=None, overwrite=false, resume=false, no_space_check=false))]
+    #[allow(clippy::too_many_arguments)]
+    fn run_to<'py>(
+        &self,
+        py: Python<'py>,
+        out_dir: PathBuf,
+        threads: usize,
+        progress: Option<Py<PyAny>>,
+        overwrite: bool,
+        resume: bool,
+        no_space_check: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        crate::run::run_to(
+            py,
+            self,
+            &out_dir,
+            threads,
+            progress,
+            crate::run::DirOptions {
+                overwrite,
+                resume,
+                no_space_check,
+            },
+        )
+    }
+}
