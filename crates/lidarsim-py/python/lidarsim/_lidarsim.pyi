@@ -2,9 +2,6 @@
 
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
-import numpy as np
-import numpy.typing as npt
-
 VERSION: str
 POINT_FIELDS: List[Tuple[str, str]]
 POINT_RECORD_BYTES: int
@@ -40,5 +37,3 @@ class SurveyCore:
         resume: bool = False,
         no_space_check: bool = False,
     ) -> Dict[str, Any]: ...
-
-_Bytes = npt.NDArray[np.uint8]

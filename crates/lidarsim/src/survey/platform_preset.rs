@@ -87,23 +87,7 @@ pub fn apply(preset: &PlatformPreset, raw: &RawPlatform) -> (RawPlatform, Vec<St
     if raw.trajectory_file.is_some() {
         return (raw.clone(), Vec::new());
     }
-    let mut table = match toml::Value::try_from(raw) {
-        Ok(toml::Value::Table(t)) => t,
-        _ => Default::default(),
-    };
-    let keys: toml::Table = toml::from_str(preset.keys).expect("preset keys are valid TOML");
-    let mut set = Vec::new();
-    for (k, v) in keys {
-        if table.contains_key(&k) {
-            continue;
-        }
-        set.push(format!("{k} = {v}"));
-        table.insert(k, v);
-    }
-    let merged = toml::Value::Table(table)
-        .try_into()
-        .expect("preset keys are platform keys");
-    (merged, set)
+    crate::survey::preset::fill(raw, preset.keys, |_, _| false)
 }
 
 /// Warnings for a line beyond the aircraft's limits: `speed_mps` and the

@@ -290,25 +290,39 @@ pub struct PresetUse {
 /// `raw` with the keys it does not give taken from `preset`, and those
 /// keys as `key = value` lines.
 pub fn apply(preset: &Preset, raw: &RawScanner) -> (RawScanner, Vec<String>) {
+    let own_deflector_keys = toml::from_str::<toml::Table>(preset.keys)
+        .expect("preset keys are valid TOML")
+        .get("deflector")
+        .cloned();
+    fill(raw, preset.keys, |table, k| {
+        // A survey that names another kind of deflector than the
+        // instrument's takes none of the instrument's deflector keys.
+        let own_deflector = table
+            .get("deflector")
+            .is_some_and(|own| Some(own) != own_deflector_keys.as_ref());
+        // A survey that sets the divergence has a round beam unless it
+        // sets the divergence along the track too.
+        let own_beam = k == "divergence_along_mrad" && table.contains_key("divergence_mrad");
+        own_beam || (own_deflector && DEFLECTOR_KEYS.contains(&k))
+    })
+}
+
+/// `raw` (a table of the survey) with each of `keys` (TOML) that it does
+/// not give and `skip(raw's table, key)` does not refuse, and the keys
+/// taken as `key = value` lines: how a preset fills a table.
+pub(crate) fn fill<T: serde::Serialize + serde::de::DeserializeOwned>(
+    raw: &T,
+    keys: &str,
+    skip: impl Fn(&toml::Table, &str) -> bool,
+) -> (T, Vec<String>) {
     let mut table = match toml::Value::try_from(raw) {
         Ok(toml::Value::Table(t)) => t,
         _ => Default::default(),
     };
-    let keys: toml::Table = toml::from_str(preset.keys).expect("preset keys are valid TOML");
-    // A survey that names another kind of deflector than the instrument's
-    // takes none of the instrument's deflector keys.
-    let own_deflector = table
-        .get("deflector")
-        .is_some_and(|own| Some(own) != keys.get("deflector"));
+    let keys: toml::Table = toml::from_str(keys).expect("preset keys are valid TOML");
     let mut set = Vec::new();
     for (k, v) in keys {
-        // A survey that sets the divergence has a round beam unless it
-        // sets the divergence along the track too.
-        let own_beam = k == "divergence_along_mrad" && table.contains_key("divergence_mrad");
-        if table.contains_key(&k)
-            || own_beam
-            || (own_deflector && DEFLECTOR_KEYS.contains(&k.as_str()))
-        {
+        if table.contains_key(&k) || skip(&table, &k) {
             continue;
         }
         set.push(format!("{k} = {v}"));
@@ -316,7 +330,7 @@ pub fn apply(preset: &Preset, raw: &RawScanner) -> (RawScanner, Vec<String>) {
     }
     let merged = toml::Value::Table(table)
         .try_into()
-        .expect("preset keys are scanner keys");
+        .expect("preset keys belong to the table");
     (merged, set)
 }
 

@@ -35,6 +35,21 @@ impl Checker {
         self.problems.push((path, msg.into()));
     }
 
+    /// Reports the unknown `id` at `path` among `ids` (a `what`: an
+    /// instrument, a platform), naming the nearest id when one is close.
+    pub fn unknown_id(&mut self, path: KeyPath, what: &str, id: &str, ids: &[&str]) {
+        let near = ids
+            .iter()
+            .min_by_key(|p| crate::message::edit_distance(p, id))
+            .filter(|p| crate::message::edit_distance(p, id) <= 3)
+            .map(|p| format!(" (did you mean \"{p}\"?)"))
+            .unwrap_or_default();
+        self.err(
+            path,
+            format!("unknown {what} '{id}'{near}; presets: {}", ids.join(", ")),
+        );
+    }
+
     /// A finite number in `[lo, hi]` (open at the ends where `*_open`).
     #[allow(clippy::too_many_arguments)]
     pub fn number(

@@ -2,7 +2,6 @@
 //! lines.
 
 use super::Checker;
-use crate::message::edit_distance;
 use crate::sensor::platform::SwayConfig;
 use crate::survey::platform_preset::{self, PlatformPresetUse};
 use crate::survey::{KeyPath, MAX_SWAY_FREQUENCIES, RawSurvey};
@@ -34,16 +33,7 @@ pub(crate) fn platform(c: &mut Checker, raw: &RawSurvey) -> Platform {
                     .iter()
                     .map(|p| p.id)
                     .collect();
-                let near = ids
-                    .iter()
-                    .min_by_key(|p| edit_distance(p, id))
-                    .filter(|p| edit_distance(p, id) <= 3)
-                    .map(|p| format!(" (did you mean \"{p}\"?)"))
-                    .unwrap_or_default();
-                c.err(
-                    pp.key("preset"),
-                    format!("unknown platform '{id}'{near}; presets: {}", ids.join(", ")),
-                );
+                c.unknown_id(pp.key("preset"), "platform", id, &ids);
                 (None, None)
             }
         },

@@ -3,7 +3,7 @@
 
 use super::Checker;
 use crate::detection::{DetectorConfig, ReturnSelection};
-use crate::message::{edit_distance, num};
+use crate::message::num;
 use crate::survey::preset::{self, PresetUse};
 use crate::survey::{
     KeyPath, MAX_PRF_HZ, MAX_PULSE_SAMPLES, MAX_RANGE_M, MAX_WINDOW_SAMPLES, MIN_PULSE_FWHM_NS,
@@ -38,19 +38,7 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
             }
             None => {
                 let ids: Vec<&str> = preset::PRESETS.iter().map(|p| p.id).collect();
-                let near = ids
-                    .iter()
-                    .min_by_key(|p| edit_distance(p, id))
-                    .filter(|p| edit_distance(p, id) <= 3)
-                    .map(|p| format!(" (did you mean \"{p}\"?)"))
-                    .unwrap_or_default();
-                c.err(
-                    sp.key("preset"),
-                    format!(
-                        "unknown instrument '{id}'{near}; presets: {}",
-                        ids.join(", ")
-                    ),
-                );
+                c.unknown_id(sp.key("preset"), "instrument", id, &ids);
                 (None, None)
             }
         },
