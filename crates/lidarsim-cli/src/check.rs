@@ -117,5 +117,11 @@ fn check(survey: &Survey, world: &World, output: &Path) {
             l.scan_line_spacing_m,
             l.across_track_spacing_m
         );
+        if let Some(deg) = l.echo_limit_deg {
+            say!(
+                "    the swath ends where the ground's echo is lost, {deg:.1}° off nadir \
+                 (within the scan's field of view)"
+            );
+        }
     }
 }

@@ -26,6 +26,7 @@ fn material(reflectance: f64, incidence_exponent: f64) -> RawMaterial {
     RawMaterial {
         reflectance: Some(reflectance),
         incidence_exponent: Some(incidence_exponent),
+        reflectance_spectrum: None,
     }
 }
 

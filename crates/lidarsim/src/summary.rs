@@ -38,6 +38,8 @@ pub struct Summary {
     pub threads: usize,
     /// Pulses emitted.
     pub pulses: u64,
+    /// Pulse slots simulated: `pulses` and a polygon's silent ticks.
+    pub pulse_slots: u64,
     /// Points written.
     pub points: u64,
     /// Pulses with at least one echo.
@@ -126,6 +128,7 @@ impl Summary {
             seed: survey.seed,
             threads: m.threads,
             pulses: counts.pulses,
+            pulse_slots: counts.pulse_slots,
             points: counts.points,
             pulses_with_echo: counts.pulses_with_echo,
             points_by_return: counts.points_by_return[..last].to_vec(),

@@ -6,20 +6,28 @@
 //! an instrument cannot fly.
 
 use lidarsim::Survey;
+use lidarsim::output::MemorySink;
 use lidarsim::plan::plan;
+use lidarsim::sim::Simulator;
 use lidarsim::survey::preset::PRESETS;
 use lidarsim::world::World;
 
 /// A survey with only `scanner` keys, one line at `h` above flat ground at
 /// `v` m/s, and the ground.
 fn survey(scanner: &str, h: f64, v: f64) -> (Survey, World) {
+    survey_along(scanner, h, v, 200.0)
+}
+
+/// As [`survey`], the line `length` metres long from y = −100 m.
+fn survey_along(scanner: &str, h: f64, v: f64, length: f64) -> (Survey, World) {
+    let y1 = -100.0 + length;
     let text = format!(
         r#"
 [scanner]
 {scanner}
 [[flight_line]]
 start_m = [0.0, -100.0, {h}]
-end_m = [0.0, 100.0, {h}]
+end_m = [0.0, {y1}, {h}]
 speed_mps = {v}
 [materials.g]
 reflectance = 0.3
@@ -42,20 +50,30 @@ fn close(got: f64, want: f64, rel: f64, what: &str) {
 }
 
 /// Datasheet figures of each preset, written out by hand: (id, PRF Hz,
-/// scan half-angle °, share of pulse slots fired, scan lines per second).
-const HAND: &[(&str, f64, f64, f64, f64)] = &[
+/// scan half-angle °, share of pulse slots fired, scan lines per second,
+/// channel tilt along the track °).
+const HAND: &[(&str, f64, f64, f64, f64, f64)] = &[
     // Oscillating mirrors: two lines per mirror cycle.
-    ("leica_als50_ii", 150_000.0, 20.0, 1.0, 2.0 * 40.0),
-    ("optech_galaxy", 550_000.0, 25.0, 1.0, 2.0 * 60.0),
+    ("leica_als50_ii", 150_000.0, 20.0, 1.0, 2.0 * 40.0, 0.0),
+    ("optech_galaxy", 550_000.0, 25.0, 1.0, 2.0 * 60.0, 0.0),
     // Polygons: 60° of a 90° sweep fire (2/3), one line per facet.
-    ("riegl_lms_q780", 400_000.0, 30.0, 2.0 / 3.0, 100.0),
-    ("riegl_vq_780i", 1_000_000.0, 30.0, 2.0 / 3.0, 225.0),
-    ("riegl_vq_1560i", 2_000_000.0, 30.0, 2.0 / 3.0, 400.0),
+    ("riegl_lms_q780", 400_000.0, 30.0, 2.0 / 3.0, 100.0, 0.0),
+    ("riegl_vq_780i", 1_000_000.0, 30.0, 2.0 / 3.0, 225.0, 0.0),
+    // Its channels look 14° forward and backward: a beam (sin θ, 0, cos θ)
+    // tilted by α meets the ground H·tan θ / cos α to the side.
+    ("riegl_vq_1560i", 2_000_000.0, 30.0, 2.0 / 3.0, 400.0, 14.0),
     // Palmer: a ±20° circle, one forward and one backward arc per turn.
-    ("riegl_vq_880_g", 550_000.0, 20.0, 1.0, 80.0),
+    ("riegl_vq_880_g", 550_000.0, 20.0, 1.0, 80.0, 0.0),
     // Risley: the rosette's lobes pass at |f1 − f2|.
-    ("livox_mid_70", 100_000.0, 35.2, 1.0, 121.566667 + 77.733333),
-    ("livox_avia", 240_000.0, 38.6, 1.0, 131.5463 + 40.8032),
+    (
+        "livox_mid_70",
+        100_000.0,
+        35.2,
+        1.0,
+        121.566667 + 77.733333,
+        0.0,
+    ),
+    ("livox_avia", 240_000.0, 38.6, 1.0, 131.5463 + 40.8032, 0.0),
 ];
 
 #[test]
@@ -66,23 +84,64 @@ fn every_preset_plans_as_its_datasheet_says() {
         PRESETS.len(),
         "a preset without a hand calculation"
     );
-    for &(id, prf, half_deg, share, lines) in HAND {
+    for &(id, prf, half_deg, share, lines, tilt_deg) in HAND {
         let (s, w) = survey(&format!("preset = \"{id}\""), h, v);
         assert!(s.warnings.is_empty(), "{id}: {:?}", s.warnings);
         let p = plan(&s, &w);
-        let swath = 2.0 * h * half_deg.to_radians().tan();
+        assert_eq!(p.lines[0].echo_limit_deg, None, "{id}");
+        let swath = 2.0 * h * half_deg.to_radians().tan() / tilt_deg.to_radians().cos();
         close(p.swath_width_m, swath, 0.005, id);
         close(p.point_density_per_m2, prf * share / (v * swath), 0.005, id);
         close(p.lines[0].scan_line_spacing_m, v / lines, 1e-6, id);
     }
-    // The VUX-1UAV looks 165° to either side: its swath over flat ground
-    // is bounded by the range, and 330/360 of its pulse slots fire.
+    // The VUX-1UAV: 330/360 of its pulse slots fire.
     let (s, _) = survey("preset = \"riegl_vux_1uav\"", 80.0, 8.0);
     close(
         s.scanner.deflector.emitted_share(),
         330.0 / 360.0,
         1e-12,
         "vux",
+    );
+}
+
+/// The VUX-1UAV looks 165° to either side: over level ground its swath is
+/// bounded by the ground's echo, not by the field of view. The plan's
+/// swath and its share of pulses that give a point are those a simulated
+/// flight gives (its points' extent across the track, and points per
+/// emitted pulse).
+#[test]
+fn a_scanner_looking_to_the_horizon_plans_the_swath_its_echoes_give() {
+    let (h, v) = (80.0, 8.0);
+    let (s, w) = survey("preset = \"riegl_vux_1uav\"", h, v);
+    let p = plan(&s, &w);
+    let l = &p.lines[0];
+    let limit = l.echo_limit_deg.expect("the echo bounds the swath");
+    assert!((45.0..89.0).contains(&limit), "{limit}");
+    close(
+        l.swath_width_m,
+        2.0 * h * limit.to_radians().tan(),
+        1e-9,
+        "edge",
+    );
+
+    // A short stretch of the line, simulated.
+    let (short, world) = survey_along("preset = \"riegl_vux_1uav\"", h, v, 2.0);
+    let mut sink = MemorySink::default();
+    let counts = Simulator::new(&short, &world)
+        .run(2, &mut [&mut sink], &|_| {})
+        .unwrap();
+    let points = sink.points;
+    let (lo, hi) = points.iter().fold((f64::MAX, f64::MIN), |(lo, hi), q| {
+        (lo.min(q.position_m.x), hi.max(q.position_m.x))
+    });
+    close(hi - lo, l.swath_width_m, 0.05, "simulated swath");
+    let planned = l.point_density_per_m2 * v * l.swath_width_m
+        / (s.scanner.prf_hz * s.scanner.deflector.emitted_share());
+    close(
+        points.len() as f64 / counts.pulses as f64,
+        planned,
+        0.03,
+        "points per pulse",
     );
 }
 

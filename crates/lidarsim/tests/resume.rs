@@ -426,6 +426,28 @@ fn full_waveform_and_ply_runs_resume_to_the_same_bytes() {
     );
 }
 
+/// A polygon fires in only part of its pulse slots: the run resumes at
+/// the slot it stopped at, not at the count of pulses that left, and its
+/// summary counts both.
+#[test]
+fn a_polygon_run_resumes_at_its_pulse_slot() {
+    let text = SURVEY.replace(
+        "scan_frequency_hz = 40\nscan_angle_deg = 15",
+        "deflector = \"polygon\"\nfacets = 4\nscan_frequency_hz = 20\nscan_angle_deg = 45",
+    );
+    assert_ne!(text, SURVEY);
+    interrupt_and_resume_equal(&text, "polygon", &["points.las", "points.xyz"]);
+    // 4 facets sweep 180° each; ±45° of it fires: half the slots, to
+    // within the slot at each end of a line (1000 slots per line).
+    let s = Survey::from_toml(&text, None).unwrap();
+    let out = dir("polygon-counts");
+    let summary = run_to_dir(&s, &out, &RunOptions::new(2, &|_| {})).unwrap();
+    assert_eq!(summary.pulse_slots, 2 * 24_000);
+    let share = summary.pulses as f64 / summary.pulse_slots as f64;
+    assert!((share - 0.5).abs() <= 2e-3, "{share}");
+    std::fs::remove_dir_all(&out).ok();
+}
+
 /// A LAZ run cannot be continued: it says so in its summary, and a resume
 /// is refused with the reason instead of being offered.
 #[test]
@@ -477,6 +499,7 @@ fn resume_refuses_an_edited_summary_survey_or_file() {
         edit(&|v| {
             v["next_pulse"]["pulse"] = moved.into();
             v["pulses"] = moved.into();
+            v["pulse_slots"] = moved.into();
         });
         let e = resume(&s).unwrap_err().to_string();
         assert!(e.contains("summary.json was edited"), "{what}: {e}");

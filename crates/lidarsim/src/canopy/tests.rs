@@ -11,6 +11,7 @@ fn one_tree(uniform: Option<f64>, k: f64) -> Bvh {
         name: "f".into(),
         reflectance: 0.4,
         incidence_exponent: 0.0,
+        spectrum: Vec::new(),
     });
     let obj = scene.add_object("tree");
     let mut spec = TreeSpec::new(DVec3::ZERO, Species::Spruce, 0.3, 20.0, 6.0);

@@ -215,6 +215,7 @@ pub fn load_gltf(
                         name,
                         reflectance,
                         incidence_exponent: 1.0,
+                        spectrum: Vec::new(),
                     }))
                 }
                 _ => default_material,

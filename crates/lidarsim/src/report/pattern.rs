@@ -6,7 +6,7 @@
 
 use crate::geometry::DVec3;
 use crate::render::{Image, ramp};
-use crate::sensor::channel::channel_of;
+use crate::sensor::channel::FiringOrder;
 use crate::survey::Survey;
 
 /// Side of the picture, px.
@@ -26,13 +26,14 @@ pub fn pattern_points(survey: &Survey, height_m: f64, speed_mps: f64) -> Vec<(f6
     let pulses = (span_s * s.prf_hz).ceil() as u64;
     let stride = pulses.div_ceil(MAX_DOTS as u64).max(1);
     let mounts: Vec<_> = s.channels.iter().map(|c| c.mount()).collect();
+    let firing = FiringOrder::new(&s.channels);
     let mut out = Vec::new();
     for k in (0..pulses).step_by(stride as usize) {
         let t = k as f64 / s.prf_hz;
         if !s.deflector.emits_at(t) {
             continue;
         }
-        let d: DVec3 = mounts[channel_of(k, mounts.len())] * s.deflector.direction_at(t);
+        let d: DVec3 = mounts[firing.channel_of(k)] * s.deflector.direction_at(t);
         // Beams more than 80° from nadir meet level ground far away, or
         // never.
         if d.z < 0.17 {

@@ -259,7 +259,7 @@ pub fn run_world_to_dir(
     if !options.no_space_check {
         let total: u64 = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
         let share = prev.as_ref().map_or(1.0, |p| {
-            1.0 - p.counts().pulses as f64 / total.max(1) as f64
+            1.0 - p.counts().pulse_slots as f64 / total.max(1) as f64
         });
         let short = budget.shortfalls(
             out_dir,
@@ -333,7 +333,7 @@ pub fn run_world_to_dir(
     let mut refs: Vec<&mut (dyn PointSink + 'static)> =
         sinks.iter_mut().map(|b| b.as_mut()).collect();
     refs.push(&mut report);
-    let done_before = before.pulses;
+    let done_before = before.pulse_slots;
     let progress = |n: u64| (options.progress)(done_before + n);
     let control = RunControl {
         start,

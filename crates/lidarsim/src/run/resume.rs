@@ -35,6 +35,10 @@ pub struct Interrupted {
     next_pulse: Option<NextPulse>,
     resume: Option<ResumeState>,
     pulses: u64,
+    /// Pulse slots simulated (absent from records of runs whose every slot
+    /// was a pulse).
+    #[serde(default)]
+    pulse_slots: Option<u64>,
     points: u64,
     pulses_with_echo: u64,
     points_by_return: Vec<u64>,
@@ -60,6 +64,7 @@ impl Interrupted {
     pub fn counts(&self) -> RunCounts {
         let mut c = RunCounts {
             pulses: self.pulses,
+            pulse_slots: self.pulse_slots.unwrap_or(self.pulses),
             points: self.points,
             pulses_with_echo: self.pulses_with_echo,
             ..RunCounts::default()
@@ -110,10 +115,11 @@ fn state_hash(
     report: &str,
 ) -> String {
     let mut text = format!(
-        "{seed}|{}|{}|{}|{}|{}|{:?}|{survey}|{report}",
+        "{seed}|{}|{}|{}|{}|{}|{}|{:?}|{survey}|{report}",
         next.line,
         next.pulse,
         counts.pulses,
+        counts.pulse_slots,
         counts.points,
         counts.pulses_with_echo,
         counts.points_by_return
@@ -230,13 +236,13 @@ pub fn read(
         .map(|l| survey.pulses_of(l))
         .sum();
     let in_line = line_ok && next.pulse < survey.pulses_of(&lines[next.line as usize - 1]);
-    if !in_line || before + next.pulse != prev.pulses {
+    let counts = prev.counts();
+    if !in_line || before + next.pulse != counts.pulse_slots {
         return Err(changed(&format!(
             "next pulse {} of line {} does not follow the {} pulses simulated",
-            next.pulse, next.line, prev.pulses
+            next.pulse, next.line, counts.pulse_slots
         )));
     }
-    let counts = prev.counts();
     let want = state_hash(
         prev.seed,
         next,
@@ -323,6 +329,7 @@ mod tests {
     fn the_state_hash_changes_with_every_part() {
         let counts = RunCounts {
             pulses: 4096,
+            pulse_slots: 4096,
             points: 4000,
             ..RunCounts::default()
         };

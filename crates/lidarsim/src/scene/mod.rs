@@ -149,6 +149,31 @@ pub struct Material {
     pub reflectance: f64,
     /// Exponent `a` of the incidence model `cos(α)^a` (1 = Lambertian).
     pub incidence_exponent: f64,
+    /// Reflectance against wavelength, `(nm, 0–1)` by increasing
+    /// wavelength, for scanners whose channels differ in wavelength; empty:
+    /// `reflectance` at every wavelength.
+    pub spectrum: Vec<(f64, f64)>,
+}
+
+impl Material {
+    /// Reflectance at `wavelength_nm`: `reflectance`, or the spectrum
+    /// interpolated linearly between its wavelengths and held at its
+    /// first and last values beyond them.
+    pub fn reflectance_at(&self, wavelength_nm: f64) -> f64 {
+        let s = &self.spectrum;
+        let (Some(first), Some(last)) = (s.first(), s.last()) else {
+            return self.reflectance;
+        };
+        if wavelength_nm <= first.0 {
+            return first.1;
+        }
+        if wavelength_nm >= last.0 {
+            return last.1;
+        }
+        let i = s.partition_point(|p| p.0 <= wavelength_nm);
+        let ((x0, y0), (x1, y1)) = (s[i - 1], s[i]);
+        y0 + (y1 - y0) * (wavelength_nm - x0) / (x1 - x0)
+    }
 }
 
 /// Index of a material in [`Scene::materials`].
@@ -308,6 +333,7 @@ impl Scene {
     ) -> MaterialId {
         let same = |m: &Material| {
             m.reflectance == reflectance
+                && m.spectrum.is_empty()
                 && m.incidence_exponent == incidence_exponent
                 && m.name.len() == prefix.len() + suffix.len()
                 && m.name.starts_with(prefix)
@@ -319,6 +345,7 @@ impl Scene {
                 name: format!("{prefix}{suffix}"),
                 reflectance,
                 incidence_exponent,
+                spectrum: Vec::new(),
             }),
         }
     }
@@ -349,5 +376,30 @@ mod tests {
             assert_eq!(SurfaceClass::from_name(name), Some(class));
             assert_eq!(class.name(), name);
         }
+    }
+
+    #[test]
+    fn reflectance_is_interpolated_between_the_spectrum_wavelengths() {
+        // Green vegetation: dark in the green, bright in the near infrared.
+        let leaf = Material {
+            name: "leaf".into(),
+            reflectance: 0.0,
+            incidence_exponent: 1.0,
+            spectrum: vec![(532.0, 0.08), (905.0, 0.44), (1550.0, 0.3)],
+        };
+        let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+        assert!(close(leaf.reflectance_at(532.0), 0.08));
+        assert!(close(leaf.reflectance_at(905.0), 0.44));
+        // A third of the way from 905 to 1550 nm.
+        assert!(close(leaf.reflectance_at(1120.0), 0.44 - 0.14 / 3.0));
+        // Held at the ends.
+        assert!(close(leaf.reflectance_at(400.0), 0.08));
+        assert!(close(leaf.reflectance_at(2000.0), 0.3));
+        let flat = Material {
+            spectrum: Vec::new(),
+            reflectance: 0.25,
+            ..leaf
+        };
+        assert!(close(flat.reflectance_at(532.0), 0.25));
     }
 }

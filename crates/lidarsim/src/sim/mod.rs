@@ -25,9 +25,11 @@ use crate::detection::Detector;
 use crate::geometry::DMat3;
 use crate::output::{PointRecord, PointSink, WaveformBlock, WaveformPacket};
 use crate::radiometry::Speckle;
+use crate::scene::Material;
 use crate::sensor::beam::Beam;
+use crate::sensor::channel::{Channel, FiringOrder};
 use crate::sensor::platform::FlightLine;
-use crate::survey::Survey;
+use crate::survey::{ScannerSettings, Survey};
 use crate::waveform::Receiver;
 use crate::world::World;
 pub use executor::{Executor, InOrder};
@@ -52,6 +54,10 @@ pub const BLOCK_PULSES: u64 = 2048;
 pub struct RunCounts {
     /// Pulses emitted.
     pub pulses: u64,
+    /// Pulse slots simulated: every tick `k / PRF`, a polygon's silent
+    /// ones included (what progress counts and where a resumed run goes
+    /// on).
+    pub pulse_slots: u64,
     /// Points written.
     pub points: u64,
     /// Pulses with at least one echo.
@@ -64,6 +70,7 @@ impl RunCounts {
     /// Adds the counts of `o`.
     pub fn add(&mut self, o: &RunCounts) {
         self.pulses += o.pulses;
+        self.pulse_slots += o.pulse_slots;
         self.points += o.points;
         self.pulses_with_echo += o.pulses_with_echo;
         for (a, b) in self.points_by_return.iter_mut().zip(o.points_by_return) {
@@ -79,7 +86,9 @@ pub struct Simulator<'a> {
     lines: &'a [FlightLine],
     receiver: Receiver,
     detector: Detector,
-    beam: Beam,
+    /// The sub-ray patterns of each channel's beam (one when all channels
+    /// share their divergence).
+    beams: Vec<Beam>,
     /// Range difference between neighbouring sub-rays that makes their
     /// cells be sampled again: the range resolution, `c·FWHM/2` (closer
     /// surfaces merge into one echo whatever their share).
@@ -96,6 +105,45 @@ pub struct Simulator<'a> {
     /// Mounting rotation of each channel of a multi-channel head; empty
     /// for the single straight channel of most scanners.
     mounts: Vec<DMat3>,
+    /// Which channel fires each pulse.
+    firing: FiringOrder,
+    /// Reflectance of each material at each channel's wavelength
+    /// (`[channel][material]`; one row when the channels share theirs).
+    reflectance: Vec<Vec<f64>>,
+}
+
+/// One beam per channel, or one for all when their divergences agree.
+fn beams(s: &ScannerSettings) -> Vec<Beam> {
+    let beam = |c: &Channel| Beam::elliptical(s.subrays, c.divergence_rad, c.divergence_along_rad);
+    match s.channels.as_slice() {
+        [first, rest @ ..]
+            if rest.iter().all(|c| {
+                (c.divergence_rad, c.divergence_along_rad)
+                    == (first.divergence_rad, first.divergence_along_rad)
+            }) =>
+        {
+            vec![beam(first)]
+        }
+        [] => vec![Beam::elliptical(
+            s.subrays,
+            s.divergence_rad,
+            s.divergence_along_rad,
+        )],
+        channels => channels.iter().map(beam).collect(),
+    }
+}
+
+/// The reflectance of every material at each channel's wavelength, one
+/// row when the channels share their wavelength.
+fn reflectance(s: &ScannerSettings, materials: &[Material]) -> Vec<Vec<f64>> {
+    let row = |nm: f64| materials.iter().map(|m| m.reflectance_at(nm)).collect();
+    match s.channels.as_slice() {
+        [first, rest @ ..] if rest.iter().all(|c| c.wavelength_nm == first.wavelength_nm) => {
+            vec![row(first.wavelength_nm)]
+        }
+        [] => vec![row(s.wavelength_nm)],
+        channels => channels.iter().map(|c| row(c.wavelength_nm)).collect(),
+    }
 }
 
 impl<'a> Simulator<'a> {
@@ -108,11 +156,7 @@ impl<'a> Simulator<'a> {
             survey,
             caster: world.index(),
             lines: &world.lines,
-            beam: Beam::elliptical(
-                survey.scanner.subrays,
-                survey.scanner.divergence_rad,
-                survey.scanner.divergence_along_rad,
-            ),
+            beams: beams(&survey.scanner),
             discontinuity_m: crate::geometry::SPEED_OF_LIGHT_MPS * survey.receiver.pulse.fwhm_s()
                 / 2.0,
             speckle: survey.speckle_looks.and_then(Speckle::new),
@@ -120,9 +164,11 @@ impl<'a> Simulator<'a> {
             boresight: survey.navigation.boresight(),
             exact_georeferencing: survey.navigation.is_zero(),
             mounts: match survey.scanner.channels.as_slice() {
-                [c] if *c == crate::sensor::channel::Channel::STRAIGHT => Vec::new(),
+                [c] if c.is_straight() => Vec::new(),
                 channels => channels.iter().map(|c| c.mount()).collect(),
             },
+            firing: FiringOrder::new(&survey.scanner.channels),
+            reflectance: reflectance(&survey.scanner, &world.scene().materials),
             receiver,
             detector,
             time_offset_s: survey.output.gps_start_time_s.unwrap_or(0.0),
@@ -191,7 +237,11 @@ impl<'a> Simulator<'a> {
         let mut counts = RunCounts::default();
         let bin_ps = self.survey.receiver.bin_s * 1e12;
         for k in k0..k1 {
-            let n = self.simulate_pulse(line, k, scratch, &mut points);
+            counts.pulse_slots += 1;
+            // A polygon's ticks in its dead time emit nothing.
+            let Some(n) = self.simulate_pulse(line, k, scratch, &mut points) else {
+                continue;
+            };
             counts.pulses += 1;
             if n > 0 {
                 counts.pulses_with_echo += 1;
@@ -338,7 +388,7 @@ impl InOrder<Block> for Writer<'_, '_> {
     }
 
     fn caught_up(&mut self) {
-        (self.progress)(self.total.pulses);
+        (self.progress)(self.total.pulse_slots);
     }
 }
 

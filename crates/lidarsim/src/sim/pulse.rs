@@ -27,7 +27,6 @@ use crate::rng::{Purpose, Stream};
 use crate::scene::{Shape, SurfaceClass};
 use crate::sensor::Pose;
 use crate::sensor::beam::{BeamPattern, FINE_PER_CELL};
-use crate::sensor::channel::channel_of;
 use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
 use crate::waveform::Return;
@@ -96,28 +95,30 @@ impl Rays<'_> {
 
 impl Simulator<'_> {
     /// Simulates pulse `k` of `line`, appending its points to `out`.
-    /// Returns the number of echoes.
+    /// Returns the number of echoes, or `None` when no pulse leaves at
+    /// this tick (a polygon facet looking outside the field of view).
     pub fn simulate_pulse(
         &self,
         line: &FlightLine,
         k: u64,
         scratch: &mut Scratch,
         out: &mut Vec<PointRecord>,
-    ) -> usize {
+    ) -> Option<usize> {
         let seed = self.survey.seed;
         let stream = |purpose| Stream::new(seed, line.index, k, purpose);
         let Some(em) = self.emit(line, k, scratch) else {
             scratch.waveform.samples.clear();
             scratch.echoes.clear();
-            return 0;
+            return None;
         };
-        let pattern = self.beam.for_pulse(|| stream(Purpose::Beam));
+        let c = usize::from(em.channel.0);
+        let pattern = self.beams[c.min(self.beams.len() - 1)].for_pulse(|| stream(Purpose::Beam));
         let refined = self.cast(&em, pattern, scratch);
         self.gather_returns(&em, pattern, refined, scratch, &stream);
         if scratch.returns.is_empty() {
             scratch.waveform.samples.clear();
             scratch.echoes.clear();
-            return 0;
+            return Some(0);
         }
         let mut noise_rng = stream(Purpose::ReceiverNoise);
         self.receiver
@@ -125,9 +126,9 @@ impl Simulator<'_> {
         self.detector
             .detect(&scratch.waveform, &mut scratch.detect, &mut scratch.echoes);
         if scratch.echoes.is_empty() {
-            return 0;
+            return Some(0);
         }
-        self.georeference(line, k, &em, scratch, &stream, out)
+        Some(self.georeference(line, k, &em, scratch, &stream, out))
     }
 
     /// Stage 1: the true pose casts the rays; the scanner sits at the
@@ -149,12 +150,8 @@ impl Simulator<'_> {
         let origin = pose.position_m + body * s.navigation.lever_arm_m;
         // The deflection's third column is the beam direction; a channel of
         // a multi-channel head turns it by its mounting.
-        let channel = if self.mounts.is_empty() {
-            (0, None)
-        } else {
-            let c = channel_of(k, self.mounts.len());
-            (c as u8, Some(self.mounts[c]))
-        };
+        let c = self.firing.channel_of(k);
+        let channel = (c as u8, self.mounts.get(c).copied());
         let deflection = match channel.1 {
             Some(mount) => mount * deflector.beam_frame(t),
             None => deflector.beam_frame(t),
@@ -235,19 +232,22 @@ impl Simulator<'_> {
             ..
         } = scratch;
         let scene = self.caster.scene();
+        let reflectance =
+            &self.reflectance[usize::from(em.channel.0).min(self.reflectance.len() - 1)];
         let rn = self.survey.receiver.reference_range_m;
         let mut speckle_rng: Option<Stream> = None;
         returns.clear();
         sources.clear();
         // Eq. 2 at the surface a sub-ray of energy `share` reached.
         let surface = |hit: &Hit, dir: &DVec3, share: f64| {
-            let mat = &scene.materials[scene.primitives[hit.prim as usize].material as usize];
+            let m = scene.primitives[hit.prim as usize].material as usize;
+            let mat = &scene.materials[m];
             let cos_inc = (-dir.dot(hit.normal)).clamp(0.0, 1.0);
             surface_return(
                 share,
                 hit.t,
                 rn,
-                mat.reflectance,
+                reflectance[m],
                 cos_inc,
                 mat.incidence_exponent,
             )
@@ -301,13 +301,13 @@ impl Simulator<'_> {
                     density,
                     transmission,
                 } => {
-                    let mat = &scene.materials[scene.primitives[prim as usize].material as usize];
+                    let m = scene.primitives[prim as usize].material as usize;
                     let power = self.canopy.return_model.foliage_return(
                         share,
                         transmission,
                         t,
                         rn,
-                        mat.reflectance,
+                        reflectance[m],
                         density,
                     );
                     (t, prim, power, DVec3::NAN)

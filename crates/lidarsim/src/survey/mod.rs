@@ -99,9 +99,10 @@ pub struct ScannerSettings {
     pub prf_hz: f64,
     /// What deflects the beam.
     pub deflector: Deflector,
-    /// The beams of the head, firing in turn (one for most scanners).
+    /// The beams of the head, firing in their cycle (one for most
+    /// scanners), each with its own divergence and wavelength.
     pub channels: Vec<Channel>,
-    /// Full beam divergence, rad.
+    /// Full beam divergence, rad (the channels' default).
     pub divergence_rad: f64,
     /// Full beam divergence along the track (the beam's y axis), rad:
     /// `divergence_rad` for a round beam.
@@ -112,7 +113,7 @@ pub struct ScannerSettings {
     pub min_range_m: f64,
     /// Farthest range the receiver records, m.
     pub max_range_m: f64,
-    /// Laser wavelength, nm (recorded in the summary).
+    /// Laser wavelength, nm (the channels' default).
     pub wavelength_nm: f64,
 }
 

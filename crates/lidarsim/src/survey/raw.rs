@@ -131,6 +131,16 @@ pub struct RawChannel {
     pub along_tilt_deg: Option<f64>,
     /// Turn about the scanner's z axis, degrees, positive to the left.
     pub yaw_deg: Option<f64>,
+    /// Full divergence across, mrad (default: the scanner's).
+    pub divergence_mrad: Option<f64>,
+    /// Full divergence along, mrad (default: as across when that is given,
+    /// else the scanner's).
+    pub divergence_along_mrad: Option<f64>,
+    /// Wavelength, nm (default: the scanner's).
+    pub wavelength_nm: Option<f64>,
+    /// Pulses of each firing cycle on this channel (default 1): its share
+    /// of the PRF is this over the channels' sum.
+    pub pulses_per_cycle: Option<i64>,
 }
 
 /// `[receiver]`: sampling, noise and detection.
@@ -204,6 +214,9 @@ pub struct RawOutput {
 pub struct RawMaterial {
     pub reflectance: Option<f64>,
     pub incidence_exponent: Option<f64>,
+    /// `[[nm, reflectance], ...]` by increasing wavelength, instead of
+    /// `reflectance`.
+    pub reflectance_spectrum: Option<Vec<Vec<f64>>>,
 }
 
 /// `[[polygon]]`.

@@ -190,3 +190,75 @@ fn deflector_keys_belong_to_their_kind() {
         d[0].message
     );
 }
+
+/// Channels take the scanner's divergence and wavelength unless they give
+/// their own; their shares and a material's spectrum are checked.
+#[test]
+fn channels_and_spectra_are_checked() {
+    let two = format!(
+        "[scanner]\ndivergence_mrad = 0.5\nwavelength_nm = 1064\n\
+         [[scanner.channels]]\nwavelength_nm = 532\npulses_per_cycle = 3\n\
+         [[scanner.channels]]\ndivergence_along_mrad = 2.0\n{MINIMAL}"
+    );
+    let s = Survey::from_toml(&two, None).unwrap();
+    let [a, b] = s.scanner.channels.as_slice() else {
+        panic!("{:?}", s.scanner.channels)
+    };
+    assert_eq!((a.divergence_rad, a.divergence_along_rad), (0.5e-3, 0.5e-3));
+    assert_eq!((a.wavelength_nm, a.pulses_per_cycle), (532.0, 3));
+    assert_eq!((b.divergence_rad, b.divergence_along_rad), (0.5e-3, 2e-3));
+    assert_eq!((b.wavelength_nm, b.pulses_per_cycle), (1064.0, 1));
+
+    let d = diagnostics(&format!(
+        "[scanner]\n[[scanner.channels]]\npulses_per_cycle = 0\n\
+         [[scanner.channels]]\nwavelength_nm = -1\n{MINIMAL}"
+    ));
+    let keys: Vec<_> = d.iter().map(|d| d.key.as_str()).collect();
+    assert_eq!(
+        keys,
+        [
+            "scanner.channels[0].pulses_per_cycle",
+            "scanner.channels[1].wavelength_nm"
+        ]
+    );
+    let d = diagnostics(&format!(
+        "[scanner]\n[[scanner.channels]]\npulses_per_cycle = 200\n\
+         [[scanner.channels]]\npulses_per_cycle = 100\n{MINIMAL}"
+    ));
+    assert_eq!(d[0].key, "scanner.channels");
+    assert!(d[0].message.contains("add up to 300"), "{}", d[0].message);
+
+    let spectral = MINIMAL.replace(
+        "reflectance = 0.4",
+        "reflectance_spectrum = [[532, 0.1], [1064, 0.5]]",
+    );
+    let s = Survey::from_toml(&spectral, None).unwrap();
+    let grass = &s.materials["grass"];
+    assert_eq!(grass.spectrum, [(532.0, 0.1), (1064.0, 0.5)]);
+    for (bad, key, says) in [
+        (
+            "reflectance = 0.4\nreflectance_spectrum = [[532, 0.1], [1064, 0.5]]",
+            "materials.grass.reflectance_spectrum",
+            "not both",
+        ),
+        (
+            "reflectance_spectrum = [[1064, 0.5], [532, 0.1]]",
+            "materials.grass.reflectance_spectrum[1]",
+            "must increase",
+        ),
+        (
+            "reflectance_spectrum = [[532, 0.1, 3], [1064, 1.5]]",
+            "materials.grass.reflectance_spectrum[0]",
+            "pair",
+        ),
+        (
+            "reflectance_spectrum = [[532, 0.1]]",
+            "materials.grass.reflectance_spectrum",
+            "at least two",
+        ),
+    ] {
+        let d = diagnostics(&MINIMAL.replace("reflectance = 0.4", bad));
+        assert_eq!(d[0].key, key, "{bad}");
+        assert!(d[0].message.contains(says), "{bad}: {}", d[0].message);
+    }
+}

@@ -17,6 +17,7 @@ fn random_scene(seed: u64, n: usize) -> Scene {
         name: "m".into(),
         reflectance: 0.5,
         incidence_exponent: 1.0,
+        spectrum: Vec::new(),
     });
     let o = scene.add_object("soup");
     for _ in 0..n {

@@ -335,6 +335,7 @@ fn mtl_to_material(m: &tobj::Material) -> Result<Material, MeshError> {
         name: m.name.clone(),
         reflectance,
         incidence_exponent,
+        spectrum: Vec::new(),
     })
 }
 

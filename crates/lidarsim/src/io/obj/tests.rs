@@ -221,6 +221,7 @@ fn loads_obj_with_mtl_materials_and_classes() {
             name: "survey_only".into(),
             reflectance: 0.33,
             incidence_exponent: 1.0,
+            spectrum: Vec::new(),
         },
     );
     let mut scene = Scene::default();

@@ -2,7 +2,6 @@
 
 use super::Checker;
 use crate::message::num;
-use crate::sensor::channel::Channel;
 use crate::sensor::deflector::risley::Prism;
 use crate::sensor::deflector::{Deflector, Fibre, Mirror, MirrorProfile, Palmer, Polygon, Risley};
 use crate::survey::KeyPath;
@@ -202,46 +201,6 @@ pub(crate) fn deflector(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f
             })
         }
     }
-}
-
-/// The channels of `[[scanner.channels]]`: one to four (the LAS scanner
-/// channel has two bits), tilts within ±45°; one straight channel when
-/// none is given.
-pub(crate) fn channels(c: &mut Checker, s: &RawScanner, sp: &KeyPath) -> Vec<Channel> {
-    let Some(raw) = &s.channels else {
-        return vec![Channel::STRAIGHT];
-    };
-    let key = sp.key("channels");
-    if raw.is_empty() || raw.len() > 4 {
-        c.err(
-            key,
-            format!(
-                "give one to four channels (the LAS scanner channel field has two bits), got {}",
-                raw.len()
-            ),
-        );
-        return vec![Channel::STRAIGHT];
-    }
-    raw.iter()
-        .enumerate()
-        .map(|(i, ch)| {
-            let k = key.index(i);
-            let tilt = c.number(
-                k.key("along_tilt_deg"),
-                ch.along_tilt_deg,
-                0.0,
-                -45.0,
-                false,
-                45.0,
-                "°",
-            );
-            let yaw = c.number(k.key("yaw_deg"), ch.yaw_deg, 0.0, -180.0, false, 180.0, "°");
-            Channel {
-                along_tilt_rad: tilt.to_radians(),
-                yaw_rad: yaw.to_radians(),
-            }
-        })
-        .collect()
 }
 
 /// A scan half-angle, degrees: from 0 to `widest` (default 20).

@@ -3,6 +3,7 @@
 //! with its key path; nothing here reads a file or builds geometry (that
 //! is [`crate::world`]'s).
 
+pub(crate) mod channel;
 pub(crate) mod deflector;
 pub(crate) mod lines;
 pub(crate) mod navigation;

@@ -55,37 +55,13 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
         );
     }
     let deflector = super::deflector::deflector(c, s, &sp, prf_hz);
-    let channels = super::deflector::channels(c, s, &sp);
-    let divergence_mrad = c.number(
-        sp.key("divergence_mrad"),
+    let (divergence_mrad, divergence_along_mrad) = super::channel::divergence(
+        c,
+        &sp,
         s.divergence_mrad,
-        0.3,
-        0.0,
-        false,
-        100.0,
-        " mrad",
+        s.divergence_along_mrad,
+        (0.3, 0.3),
     );
-    let divergence_along_mrad = match s.divergence_along_mrad {
-        None => divergence_mrad,
-        given => {
-            let along = c.number(
-                sp.key("divergence_along_mrad"),
-                given,
-                divergence_mrad,
-                0.0,
-                false,
-                100.0,
-                " mrad",
-            );
-            if divergence_mrad == 0.0 && along > 0.0 {
-                c.err(
-                    sp.key("divergence_along_mrad"),
-                    "an elliptical beam needs divergence_mrad (across) above 0 as well",
-                );
-            }
-            along
-        }
-    };
     let subrays = c.count(sp.key("subrays"), s.subrays, 19, 1, 10_000) as usize;
     let pulse_fwhm_ns = match s.pulse_fwhm_ns {
         Some(v) if v > 0.0 && v < MIN_PULSE_FWHM_NS => {
@@ -185,6 +161,16 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
         " m",
     );
     let wavelength_nm = c.positive(sp.key("wavelength_nm"), s.wavelength_nm, 1064.0, " nm");
+    let channels = super::channel::channels(
+        c,
+        s,
+        &sp,
+        (
+            divergence_mrad * 1e-3,
+            divergence_along_mrad * 1e-3,
+            wavelength_nm,
+        ),
+    );
 
     // [receiver]
     let r = &raw.receiver;

@@ -18,10 +18,20 @@ pub(crate) fn materials(c: &mut Checker, raw: &RawSurvey) -> Materials {
     let mut materials: HashMap<String, Material> = HashMap::new();
     for (name, m) in &raw.materials {
         let mp = root.key("materials").key(name);
-        if m.reflectance.is_none() {
+        let spectrum = match &m.reflectance_spectrum {
+            Some(pairs) => spectrum(c, mp.key("reflectance_spectrum"), pairs),
+            None => Vec::new(),
+        };
+        if m.reflectance.is_some() && m.reflectance_spectrum.is_some() {
+            c.err(
+                mp.key("reflectance_spectrum"),
+                "give reflectance or reflectance_spectrum, not both",
+            );
+        } else if m.reflectance.is_none() && m.reflectance_spectrum.is_none() {
             c.err(
                 mp.key("reflectance"),
-                "is required: reflectance from 0 to 1",
+                "is required: reflectance from 0 to 1 (or reflectance_spectrum, \
+                 [[nm, reflectance], ...])",
             );
         }
         let reflectance = c.number(
@@ -48,10 +58,55 @@ pub(crate) fn materials(c: &mut Checker, raw: &RawSurvey) -> Materials {
                 name: name.clone(),
                 reflectance,
                 incidence_exponent,
+                spectrum,
             },
         );
     }
     Materials(materials)
+}
+
+/// A reflectance spectrum: pairs `[nm, reflectance]`, at least two, by
+/// strictly increasing wavelength, reflectances from 0 to 1.
+fn spectrum(c: &mut Checker, key: KeyPath, pairs: &[Vec<f64>]) -> Vec<(f64, f64)> {
+    let mut out: Vec<(f64, f64)> = Vec::with_capacity(pairs.len());
+    if pairs.len() < 2 {
+        c.err(
+            key.clone(),
+            format!(
+                "give at least two [nm, reflectance] pairs, got {}",
+                pairs.len()
+            ),
+        );
+    }
+    for (i, p) in pairs.iter().enumerate() {
+        let k = key.index(i);
+        let &[nm, r] = p.as_slice() else {
+            c.err(
+                k,
+                format!("must be a pair [nm, reflectance], got {} numbers", p.len()),
+            );
+            continue;
+        };
+        if !(nm.is_finite() && nm > 0.0) {
+            c.err(k, format!("wavelength must be above 0 nm, got {nm}"));
+            continue;
+        }
+        if !(0.0..=1.0).contains(&r) {
+            c.err(k, format!("reflectance must be from 0 to 1, got {r}"));
+            continue;
+        }
+        if let Some(&(prev, _)) = out.last()
+            && nm <= prev
+        {
+            c.err(
+                k,
+                format!("wavelengths must increase: {nm} nm follows {prev} nm"),
+            );
+            continue;
+        }
+        out.push((nm, r));
+    }
+    out
 }
 
 /// Checks `[[polygon]]` entries: their vertices must make a planar

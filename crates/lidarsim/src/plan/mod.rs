@@ -11,6 +11,8 @@
 //! [`crate::sensor::deflector::Deflector::lines_per_s`]), and the
 //! footprint diameter at nadir is `H·γ` for full divergence γ.
 
+mod swath;
+
 use serde::Serialize;
 
 use crate::accel::RayCaster;
@@ -23,14 +25,19 @@ use crate::world::World;
 pub struct LinePlan {
     /// Flight line number, 1 for the first (the LAS point source ID).
     pub line: u32,
-    /// Pulses emitted.
+    /// Pulses emitted (a polygon's ticks in its dead time emit none).
     pub pulses: u64,
     /// Duration, s.
     pub duration_s: f64,
     /// Height of the sensor above the ground under the middle of the line, m.
     pub height_above_ground_m: f64,
-    /// Swath width `2·H·tan θ`, m.
+    /// Swath width `2·H·tan θ` (`/ cos α` for channels tilted `α` along
+    /// the track), or less where the ground's echo is lost, m.
     pub swath_width_m: f64,
+    /// Off-nadir angle beyond which the ground under the line returns no
+    /// echo, degrees, when that cuts the scan (a scanner looking to the
+    /// horizon).
+    pub echo_limit_deg: Option<f64>,
     /// Mean point density `PRF / (v·W)`, points per m² (one return per pulse).
     pub point_density_per_m2: f64,
     /// Footprint diameter at nadir `H·γ`, m.
@@ -79,6 +86,22 @@ fn ground_above(
     })
 }
 
+/// The material of the ground straight below `p` (ground, road or water
+/// first, else any surface).
+fn ground_material(caster: &dyn RayCaster, p: DVec3) -> Option<&crate::scene::Material> {
+    let down = Ray {
+        origin: p,
+        dir: -DVec3::Z,
+    };
+    let ground = |prim: &crate::scene::Primitive| prim.class.is_ground();
+    let hit = caster
+        .closest_hit_where(&down, 0.0, f64::INFINITY, &ground)
+        .or_else(|| caster.closest_hit(&down, 0.0, f64::INFINITY))?;
+    let scene = caster.scene();
+    let prim = &scene.primitives[hit.prim as usize];
+    scene.materials.get(prim.material as usize)
+}
+
 /// Computes the plan of `survey` over its world.
 pub fn plan(survey: &Survey, world: &World) -> Plan {
     let caster = world.index();
@@ -87,16 +110,18 @@ pub fn plan(survey: &Survey, world: &World) -> Plan {
     for line in &world.lines {
         let mid = (line.start_m + line.end_m) * 0.5;
         let h = (mid.z - crate::accel::ground_below(caster, mid)).max(0.0);
-        let w = 2.0 * h * s.deflector.across_half_angle_rad().tan();
-        let pulses = survey.pulses_of(line);
+        let sw = swath::swath(survey, h, ground_material(caster, mid));
+        let w = sw.width_m;
+        let pulses = (survey.pulses_of(line) as f64 * s.deflector.emitted_share()).round() as u64;
         let step_rad = s.deflector.pulse_step_rad(s.prf_hz);
-        let prf = s.prf_hz * s.deflector.emitted_share();
+        let prf = s.prf_hz * s.deflector.emitted_share() * sw.landing_share;
         lines.push(LinePlan {
             line: line.index + 1,
             pulses,
             duration_s: line.duration_s(),
             height_above_ground_m: h,
             swath_width_m: w,
+            echo_limit_deg: sw.echo_limit_rad.map(f64::to_degrees),
             point_density_per_m2: if w > 0.0 {
                 prf / (line.speed_mps * w)
             } else {
@@ -197,7 +222,10 @@ pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
                 s.max_range_m
             ));
         }
-        let r = edge.min(s.max_range_m);
+        // The farthest ground with an echo: the scan's edge, or nearer
+        // where the echo is lost first.
+        let widest = lp.echo_limit_deg.map_or(theta, f64::to_radians);
+        let r = (h / widest.cos()).min(edge).min(s.max_range_m);
         if farthest.is_none_or(|(f, _)| r > f) {
             farthest = Some((r, n));
         }
