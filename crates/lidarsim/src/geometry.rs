@@ -137,6 +137,108 @@ impl Aabb {
     }
 }
 
+/// An upright cylinder: the bounds of a tree's stem or crown.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VerticalCylinder {
+    /// Horizontal position of the axis, m.
+    pub axis: (f64, f64),
+    /// Radius, m.
+    pub radius: f64,
+    /// Bottom and top, world z.
+    pub z: (f64, f64),
+}
+
+impl VerticalCylinder {
+    /// The cylinder grown by `margin_m` in radius and at both ends.
+    pub fn grown(&self, margin_m: f64) -> Self {
+        Self {
+            axis: self.axis,
+            radius: self.radius + margin_m,
+            z: (self.z.0 - margin_m, self.z.1 + margin_m),
+        }
+    }
+
+    /// The interval of `ray` inside the cylinder, within `(t_min, t_max)`
+    /// (`ray.dir` need not be a unit vector).
+    pub fn span(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
+        let r = self.radius;
+        let (z_base, z_top) = self.z;
+        let (ox, oy) = (ray.origin.x - self.axis.0, ray.origin.y - self.axis.1);
+        let (dx, dy) = (ray.dir.x, ray.dir.y);
+        let (mut t0, mut t1) = (t_min, t_max);
+        // Side of the cylinder.
+        let a = dx * dx + dy * dy;
+        if a < 1e-18 {
+            if ox * ox + oy * oy > r * r {
+                return None;
+            }
+        } else {
+            let b = ox * dx + oy * dy;
+            let c = ox * ox + oy * oy - r * r;
+            let disc = b * b - a * c;
+            if disc < 0.0 {
+                return None;
+            }
+            let sq = disc.sqrt();
+            t0 = t0.max((-b - sq) / a);
+            t1 = t1.min((-b + sq) / a);
+        }
+        // Caps.
+        if ray.dir.z.abs() < 1e-18 {
+            if ray.origin.z < z_base || ray.origin.z > z_top {
+                return None;
+            }
+        } else {
+            let ta = (z_base - ray.origin.z) / ray.dir.z;
+            let tb = (z_top - ray.origin.z) / ray.dir.z;
+            t0 = t0.max(ta.min(tb));
+            t1 = t1.min(ta.max(tb));
+        }
+        (t0 < t1).then_some((t0, t1))
+    }
+
+    /// Whether some ray of a cone may meet the cylinder within
+    /// `(t_min, t_max]`: the rays leave `origin` and each one's point at
+    /// distance `t` lies within `t·spread` of `origin + t·axis` (`axis` the
+    /// mean of unit directions and `spread` the largest distance of one
+    /// from it), so a ray meeting the cylinder at `t` puts that line within
+    /// `t·spread` of it. `false` means no ray meets it.
+    pub fn may_meet_cone(
+        &self,
+        origin: DVec3,
+        axis: DVec3,
+        spread: f64,
+        t_min: f64,
+        t_max: f64,
+    ) -> bool {
+        // Up to the distance where the cone is a metre wide, a cylinder
+        // grown by a metre bounds where the line can come near enough;
+        // within that stretch, by the cone's width at its far end.
+        const SLACK_M: f64 = 1.0;
+        let line = Ray { origin, dir: axis };
+        let t_cap = if spread > 0.0 {
+            t_max.min(SLACK_M / spread)
+        } else {
+            t_max
+        };
+        if t_cap < t_max
+            && self
+                .grown(spread * t_max)
+                .span(&line, t_cap, t_max)
+                .is_some()
+        {
+            return true;
+        }
+        let Some((_, t_far)) = self.grown(SLACK_M).span(&line, t_min, t_cap) else {
+            return false;
+        };
+        let margin = spread * t_far * (1.0 + 1e-9) + 1e-9 * t_far;
+        self.grown(margin.min(SLACK_M))
+            .span(&line, t_min, t_far)
+            .is_some()
+    }
+}
+
 /// Right-handed rotation by `a` radians about the world/body x axis.
 pub fn rot_x(a: f64) -> DMat3 {
     DMat3::from_rotation_x(a)

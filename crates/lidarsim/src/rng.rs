@@ -108,6 +108,26 @@ impl Stream {
         (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
     }
 
+    /// Standard exponential deviate, mean 1 (the ziggurat method of
+    /// Marsaglia & Tsang, as implemented by `rand_distr::Exp1`).
+    #[inline]
+    pub fn exp1(&mut self) -> f64 {
+        use rand_distr::Distribution;
+        rand_distr::Exp1.sample(self)
+    }
+
+    /// The `i`-th of a family of streams derived from this one's key:
+    /// independent of it and of each other, whatever was drawn from any
+    /// (for numbers that belong to the `i`-th of many things, drawn in any
+    /// order or not at all).
+    #[inline]
+    pub fn substream(&self, i: u64) -> Stream {
+        Stream {
+            key: mix64(self.key ^ mix64(i.wrapping_add(1).wrapping_mul(GOLDEN))),
+            counter: 0,
+        }
+    }
+
     /// Standard normal deviate (the ziggurat method of Marsaglia & Tsang,
     /// as implemented by `rand_distr::StandardNormal`).
     #[inline]
@@ -173,6 +193,41 @@ mod tests {
             let c: Vec<u64> = (0..8).map(|_| o.next_u64()).collect();
             assert!(a.iter().zip(&c).all(|(x, y)| x != y));
         }
+    }
+
+    /// Substreams are streams of their own: the same for the same index,
+    /// unrelated to the parent's numbers and to each other's.
+    #[test]
+    fn substreams_are_independent_of_the_parent_and_each_other() {
+        let parent = Stream::new(3, 1, 77, Purpose::Canopy);
+        let first = |mut s: Stream| (0..4).map(|_| s.next_u64()).collect::<Vec<_>>();
+        assert_eq!(first(parent.substream(5)), first(parent.substream(5)));
+        let mut drawn = parent.clone();
+        drawn.next_u64();
+        assert_eq!(first(parent.substream(5)), first(drawn.substream(5)));
+        let own = first(parent.clone());
+        for i in 0..50 {
+            let a = first(parent.substream(i));
+            assert!(a.iter().all(|x| !own.contains(x)));
+            assert!(a != first(parent.substream(i + 1)));
+        }
+    }
+
+    #[test]
+    fn exponential_moments() {
+        // Mean 1, variance 1 and P(E > 3) = e^-3 over 200 000 draws,
+        // within about five standard errors.
+        let n = 200_000;
+        let mut s = Stream::new(1, 2, 4, Purpose::Test);
+        let e: Vec<f64> = (0..n).map(|_| s.exp1()).collect();
+        let mean = e.iter().sum::<f64>() / n as f64;
+        let var = e.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        let tail = e.iter().filter(|&&x| x > 3.0).count() as f64 / n as f64;
+        assert!(e.iter().all(|&x| x >= 0.0));
+        assert!((mean - 1.0).abs() < 5.0 / (n as f64).sqrt());
+        assert!((var - 1.0).abs() < 5.0 * (8.0 / n as f64).sqrt());
+        let p = (-3.0f64).exp();
+        assert!((tail - p).abs() < 5.0 * (p * (1.0 - p) / n as f64).sqrt());
     }
 
     #[test]

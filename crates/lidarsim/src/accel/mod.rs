@@ -71,37 +71,64 @@ pub trait RayCaster: Send + Sync {
     /// the specification tests trees and surfaces.
     fn trace(&self, ray: &Ray, t_min: f64, t_max: f64, spans: &mut Vec<VolumeSpan>) -> Option<Hit>;
 
-    /// [`RayCaster::trace`] for all sub-rays of one pulse, which share
-    /// `origin`; results in `out` (cleared first), in the order of `dirs`.
+    /// The closest hits of all sub-rays of one pulse, which share
+    /// `origin`, in `out` (cleared first) in the order of `dirs`, with the
+    /// volumes their ways may cross ([`PulseTrace::volumes`]; each
+    /// sub-ray's spans through them are [`spans_along`] its way).
     fn trace_pulse(
         &self,
         origin: DVec3,
         dirs: &[DVec3],
         t_min: f64,
         t_max: f64,
-        spans: &mut Vec<VolumeSpan>,
         out: &mut PulseTrace,
     ) {
-        self.trace_each(origin, dirs, t_min, t_max, spans, out);
+        self.trace_each(origin, dirs, t_min, t_max, out);
     }
 
     /// [`RayCaster::trace_pulse`] by tracing each sub-ray on its own (the
-    /// default, and the fallback of structures with a faster bundle path).
+    /// default, and the fallback of structures with a faster bundle path):
+    /// the volumes are those the sub-rays cross.
     fn trace_each(
         &self,
         origin: DVec3,
         dirs: &[DVec3],
         t_min: f64,
         t_max: f64,
-        spans: &mut Vec<VolumeSpan>,
         out: &mut PulseTrace,
     ) {
         out.clear();
+        let mut spans = std::mem::take(&mut out.spans);
         for dir in dirs {
-            let hit = self.trace(&Ray { origin, dir: *dir }, t_min, t_max, spans);
-            out.push(hit, spans);
+            let hit = self.trace(&Ray { origin, dir: *dir }, t_min, t_max, &mut spans);
+            out.push_hit(hit);
+            out.volumes.extend(spans.iter().map(|s| s.prim));
+        }
+        out.volumes.sort_unstable();
+        out.volumes.dedup();
+        out.spans = spans;
+    }
+}
+
+/// The spans of `ray` through those of `volumes` it crosses within
+/// `(t_min, t_hit)`, into `out` (cleared first): clipped to `t_hit` and
+/// sorted by entry, as [`RayCaster::trace`] gives them when `volumes` holds
+/// every volume the ray crosses.
+pub fn spans_along(
+    scene: &Scene,
+    volumes: &[u32],
+    ray: &Ray,
+    t_min: f64,
+    t_hit: f64,
+    out: &mut Vec<VolumeSpan>,
+) {
+    out.clear();
+    for &v in volumes {
+        if let Some(s) = volume_span(&scene.primitives[v as usize], v, ray, t_min, t_hit) {
+            out.push(s);
         }
     }
+    finish_spans(out, t_hit);
 }
 
 /// Builds the hit record for primitive `prim` at distance `t`, with the

@@ -1,22 +1,25 @@
-//! The result of tracing a pulse: per sub-ray its closest hit and the
-//! crown spans on its way.
+//! The result of tracing a pulse: per sub-ray its closest hit, and the
+//! crowns on the pulse's way.
 
 use super::{Hit, VolumeSpan, bvh};
 use crate::geometry::DVec3;
 
-/// Closest hits and volume spans of all sub-rays of one pulse.
+/// Closest hits of all sub-rays of one pulse and the volumes (crowns) on
+/// their way.
 #[derive(Clone, Debug, Default)]
 pub struct PulseTrace {
     /// Per sub-ray: its closest surface. Bundle traversals work in it
     /// directly, with a NaN normal until the end for surfaces other than
     /// triangles.
     pub(crate) hits: Vec<Nearest>,
-    spans: Vec<VolumeSpan>,
-    ranges: Vec<(u32, u32)>,
-    /// Working storage of bundle traversals: volumes met by the bundle.
+    /// Every volume primitive some sub-ray may cross before its closest
+    /// surface, each once: a superset of the crowns crossed (those whose
+    /// bounds the traversal could not rule out), in no particular order.
     pub(crate) volumes: Vec<u32>,
     /// Working storage of bundle traversals: the node stack.
     pub(crate) stack: Vec<bvh::Pending>,
+    /// Working storage of ray-by-ray tracing: one sub-ray's spans.
+    pub(crate) spans: Vec<VolumeSpan>,
 }
 
 /// A sub-ray's closest surface in a [`PulseTrace`] (so far, while a
@@ -73,29 +76,18 @@ impl Nearest {
 }
 
 impl PulseTrace {
-    /// Empties the trace for `n` sub-rays.
+    /// Empties the trace.
     pub fn clear(&mut self) {
         self.hits.clear();
-        self.spans.clear();
-        self.ranges.clear();
+        self.volumes.clear();
     }
 
-    /// Records the result of the next sub-ray: its hit and the spans that
-    /// [`crate::accel::RayCaster::trace`] left in `spans`.
-    pub fn push(&mut self, hit: Option<Hit>, spans: &[VolumeSpan]) {
-        self.push_spans(spans);
+    /// Records the closest hit of the next sub-ray.
+    pub fn push_hit(&mut self, hit: Option<Hit>) {
         self.hits.push(match hit {
             Some(h) => Nearest::hit(h.t, h.prim, h.normal),
             None => Nearest::miss(f64::INFINITY),
         });
-    }
-
-    /// Records the spans of the next sub-ray, whose hit the caller sets in
-    /// `hits`.
-    pub(crate) fn push_spans(&mut self, spans: &[VolumeSpan]) {
-        let start = self.spans.len() as u32;
-        self.spans.extend_from_slice(spans);
-        self.ranges.push((start, self.spans.len() as u32));
     }
 
     /// Closest surface hit of sub-ray `i`.
@@ -131,17 +123,15 @@ impl PulseTrace {
         (lo, hi)
     }
 
-    /// True when no sub-ray has a volume span (no crown on its way).
+    /// True when no sub-ray may cross a volume (no crown on any way).
     #[inline]
-    pub fn has_no_spans(&self) -> bool {
-        self.spans.is_empty()
+    pub fn has_no_volumes(&self) -> bool {
+        self.volumes.is_empty()
     }
 
-    /// Volume spans of sub-ray `i`, sorted by entry distance.
-    pub fn spans_of(&self, i: usize) -> &[VolumeSpan] {
-        match self.ranges.get(i) {
-            Some(&(a, b)) => &self.spans[a as usize..b as usize],
-            None => &[],
-        }
+    /// The volume primitives some sub-ray may cross before its closest
+    /// surface, each once (a superset of those crossed).
+    pub fn volumes(&self) -> &[u32] {
+        &self.volumes
     }
 }

@@ -158,19 +158,24 @@ fn the_density_at_a_level_is_the_density_at_a_point() {
 /// near the ground, over `pulses` pulses, through the pulse march.
 fn pulse_fates(bvh: &Bvh, x: f64, n: usize, pulses: u64) -> Vec<Fate> {
     let mut march = PulseMarch::default();
-    let mut spans = Vec::new();
     let mut fates = Vec::new();
     let origin = DVec3::new(x, 0.0, 1000.0);
+    // The one crown of the scene.
+    let volumes = [0];
     for k in 0..pulses {
         march.clear();
         for i in 0..n {
             let dir = DVec3::new(0.01 * i as f64, 0.0, -1000.0).normalize();
-            let ray = Ray::new(origin, dir);
-            bvh.trace(&ray, 0.0, 1e9, &mut spans);
-            march.push(ray.dir, 0.0, 1000.0, &spans);
+            march.push(dir, 0.0, 1000.0);
         }
         let mut rng = Stream::new(3, 0, k, Purpose::Canopy);
-        march.run(bvh.scene(), origin, &CanopyConfig::default(), &mut rng);
+        march.run(
+            bvh.scene(),
+            origin,
+            &volumes,
+            &CanopyConfig::default(),
+            &mut rng,
+        );
         fates.extend_from_slice(march.fates());
     }
     fates

@@ -16,12 +16,12 @@ pub mod tree;
 mod triangle;
 
 pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
-pub use tree::{Crown, CrownLevel, Species, TreeSpec, Trunk};
+pub use tree::{Crown, CrownLevel, CrownProfile, Species, TreeSpec, Trunk};
 pub use triangle::{
     Coverage, EdgeTest, Straddle, Triangle, TriangleFan, bundle_cone, bundle_spread,
 };
 
-use crate::geometry::{Aabb, DVec3, Ray};
+use crate::geometry::{Aabb, DVec3, Ray, VerticalCylinder};
 
 /// Where a mesh goes in the world and what it defaults to.
 #[derive(Clone, Debug)]
@@ -228,6 +228,17 @@ impl Primitive {
             Shape::Crown(c) => c.bounds(),
             Shape::Terrain(t) => t.bounds(),
             Shape::Voxel(v) => v.bounds,
+        }
+    }
+
+    /// The upright cylinder that bounds a tree's stem or crown (`None` for
+    /// other shapes).
+    #[inline]
+    pub fn bounds_cylinder(&self) -> Option<VerticalCylinder> {
+        match &self.shape {
+            Shape::Trunk(t) => Some(t.bounds_cylinder()),
+            Shape::Crown(c) => Some(c.bounds_cylinder()),
+            _ => None,
         }
     }
 

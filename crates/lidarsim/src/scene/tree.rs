@@ -10,7 +10,7 @@
 //! the three factors that follow it). Sub-rays march through crowns and are
 //! intercepted by a lottery (see [`crate::canopy`]).
 
-use crate::geometry::{Aabb, DVec3, Ray};
+use crate::geometry::{Aabb, DVec3, Ray, VerticalCylinder};
 
 /// The rotation of the branch pattern from one whorl to the next: the
 /// golden angle `π(3 − √5)`, so that no two whorls line up.
@@ -295,6 +295,15 @@ impl Trunk {
         }
     }
 
+    /// The stem's bounding cylinder (its radius at the base).
+    pub fn bounds_cylinder(&self) -> VerticalCylinder {
+        VerticalCylinder {
+            axis: (self.axis_x, self.axis_y),
+            radius: self.radius_at(self.z_base),
+            z: (self.z_base, self.z_top),
+        }
+    }
+
     /// Bounding box.
     pub fn bounds(&self) -> Aabb {
         let r = self.radius_at(self.z_base);
@@ -388,11 +397,16 @@ pub struct CrownLevel {
     pub radius_sq: f64,
     /// Envelope radius, m.
     pub radius: f64,
-    inv_radius: f64,
-    height_factor: f64,
-    whorl_cos: f64,
-    whorl_sin: f64,
-    uniform_density: Option<f64>,
+    /// `1 / radius` (0 for a zero radius), 1/m.
+    pub inv_radius: f64,
+    /// The height factor at this level.
+    pub height_factor: f64,
+    /// `cos` of the whorl's rotation `f` at this level.
+    pub whorl_cos: f64,
+    /// `sin` of the whorl's rotation `f` at this level.
+    pub whorl_sin: f64,
+    /// The crown's constant density, when it has one.
+    pub uniform_density: Option<f64>,
 }
 
 impl CrownLevel {
@@ -421,57 +435,129 @@ impl CrownLevel {
     }
 }
 
-/// Number of cells of the tables of `χ^c` ([`shape_factor`]).
+/// Number of cells of the tables of `χ^c` ([`ShapeFactor`]).
 const SHAPE_CELLS: usize = 1024;
 
-/// `χ^c` for `χ` in [0, 1]: exact for `c` = 1 and 0.5, from a table with
-/// linear interpolation for the species presets' other exponents (the
-/// foliage density it gives differs from `powf`'s by less than 1e-4 below
-/// the top 0.1 % of the crown, where the envelope is the flat top `a`
-/// within a few millimetres), and `powf` otherwise.
-#[inline]
-fn shape_factor(c: f64, chi: f64) -> f64 {
-    use std::sync::OnceLock;
-    static TABLES: OnceLock<[(f64, Box<[f64]>); 2]> = OnceLock::new();
-    if c == 1.0 {
-        return chi;
-    }
-    if c == 0.5 {
-        return chi.sqrt();
-    }
-    let tables = TABLES.get_or_init(|| {
-        [0.6, 0.9].map(|e: f64| {
-            let t = (0..=SHAPE_CELLS)
-                .map(|i| (i as f64 / SHAPE_CELLS as f64).powf(e))
-                .collect();
-            (e, t)
-        })
-    });
-    match tables.iter().find(|(e, _)| *e == c) {
-        Some((_, t)) => {
-            let x = chi.clamp(0.0, 1.0) * SHAPE_CELLS as f64;
-            let i = (x as usize).min(SHAPE_CELLS - 1);
-            let f = x - i as f64;
-            t[i] + (t[i + 1] - t[i]) * f
+/// How `χ^c` is computed for one crown: exactly for `c` = 1 and 0.5, from
+/// a table with linear interpolation for the species presets' other
+/// exponents (the foliage density it gives differs from `powf`'s by less
+/// than 1e-4 below the top 0.1 % of the crown, where the envelope is the
+/// flat top `a` within a few millimetres), and `powf` otherwise.
+#[derive(Clone, Copy, Debug)]
+enum ShapeFactor {
+    Linear,
+    Sqrt,
+    Table(&'static [f64]),
+    Pow(f64),
+}
+
+impl ShapeFactor {
+    fn of(c: f64) -> Self {
+        use std::sync::OnceLock;
+        static TABLES: OnceLock<[(f64, Box<[f64]>); 2]> = OnceLock::new();
+        if c == 1.0 {
+            return Self::Linear;
         }
-        None => chi.powf(c),
+        if c == 0.5 {
+            return Self::Sqrt;
+        }
+        let tables = TABLES.get_or_init(|| {
+            [0.6, 0.9].map(|e: f64| {
+                let t = (0..=SHAPE_CELLS)
+                    .map(|i| (i as f64 / SHAPE_CELLS as f64).powf(e))
+                    .collect();
+                (e, t)
+            })
+        });
+        match tables.iter().find(|(e, _)| *e == c) {
+            Some((_, t)) => Self::Table(t),
+            None => Self::Pow(c),
+        }
+    }
+
+    /// `χ^c` for `χ` in [0, 1].
+    #[inline]
+    fn at(self, chi: f64) -> f64 {
+        match self {
+            Self::Linear => chi,
+            Self::Sqrt => chi.sqrt(),
+            Self::Table(t) => {
+                let x = chi.clamp(0.0, 1.0) * SHAPE_CELLS as f64;
+                let i = (x as usize).min(SHAPE_CELLS - 1);
+                let f = x - i as f64;
+                t[i] + (t[i + 1] - t[i]) * f
+            }
+            Self::Pow(c) => chi.powf(c),
+        }
     }
 }
 
 /// `cos` and `sin` of `w` times the golden angle for the first whorls.
-fn whorl_rotation(w: usize) -> Option<(f64, f64)> {
+fn whorl_rotations() -> &'static [(f64, f64)] {
     use std::sync::OnceLock;
     const WHORLS: usize = 1024;
     static TABLE: OnceLock<Box<[(f64, f64)]>> = OnceLock::new();
-    let t = TABLE.get_or_init(|| {
+    TABLE.get_or_init(|| {
         (0..WHORLS)
             .map(|w| {
                 let (s, c) = (w as f64 * GOLDEN_ANGLE).sin_cos();
                 (c, s)
             })
             .collect()
-    });
-    t.get(w).copied()
+    })
+}
+
+/// A crown with its tables looked up, for [`CrownProfile::level`] at many
+/// heights ([`Crown::profile`]).
+#[derive(Clone, Copy, Debug)]
+pub struct CrownProfile {
+    crown: Crown,
+    shape: ShapeFactor,
+    /// The whorl rotations by the golden angle, when the crown turns by it.
+    rotations: Option<&'static [(f64, f64)]>,
+}
+
+impl CrownProfile {
+    /// The crown.
+    pub fn crown(&self) -> &Crown {
+        &self.crown
+    }
+
+    /// What the density depends on at world height `z`, for
+    /// [`CrownLevel::density`]; `None` above or below the crown. The
+    /// envelope radius comes from a table of `χ^c` and the whorl's rotation
+    /// from the stored phase turned by a tabulated multiple of the golden
+    /// angle, so that no `powf` or `sin_cos` is left per step.
+    #[inline]
+    pub fn level(&self, z: f64) -> Option<CrownLevel> {
+        let c = &self.crown;
+        if z > c.z_top || z < c.z_base {
+            return None;
+        }
+        let chi = (c.z_top - z) / (c.z_top - c.z_base);
+        let radius = c.a + c.b * self.shape.at(chi);
+        let whorl = ((c.z_top - z) / c.whorl_spacing_m).floor();
+        let rotation = self.rotations.and_then(|t| t.get(whorl as usize));
+        let (whorl_cos, whorl_sin) = match rotation {
+            Some(&(rc, rs)) => (
+                c.phase_cos * rc - c.phase_sin * rs,
+                c.phase_sin * rc + c.phase_cos * rs,
+            ),
+            None => {
+                let (s, co) = (c.whorl_phase + whorl * c.whorl_step).sin_cos();
+                (co, s)
+            }
+        };
+        Some(CrownLevel {
+            radius_sq: radius * radius,
+            radius,
+            inv_radius: if radius > 0.0 { 1.0 / radius } else { 0.0 },
+            height_factor: if chi <= 0.5 { 1.0 } else { 2.0 * (1.0 - chi) },
+            whorl_cos,
+            whorl_sin,
+            uniform_density: c.uniform_density,
+        })
+    }
 }
 
 impl Crown {
@@ -532,39 +618,21 @@ impl Crown {
         (d <= r).then(|| (chi, if r > 0.0 { d / r } else { 0.0 }, dy.atan2(dx)))
     }
 
+    /// The crown with its tables looked up, for levels at many heights.
+    pub fn profile(&self) -> CrownProfile {
+        CrownProfile {
+            crown: *self,
+            shape: ShapeFactor::of(self.c),
+            rotations: (self.whorl_step == GOLDEN_ANGLE).then(whorl_rotations),
+        }
+    }
+
     /// What the density depends on at world height `z`, for
-    /// [`CrownLevel::density`]; `None` above or below the crown. The
-    /// envelope radius comes from a table of `χ^c` and the
-    /// whorl's rotation from the stored phase turned by a tabulated
-    /// multiple of the golden angle, so that no `powf` or `sin_cos` is
-    /// left per step.
+    /// [`CrownLevel::density`]; `None` above or below the crown
+    /// ([`CrownProfile::level`]).
     #[inline]
     pub fn level(&self, z: f64) -> Option<CrownLevel> {
-        if z > self.z_top || z < self.z_base {
-            return None;
-        }
-        let chi = (self.z_top - z) / (self.z_top - self.z_base);
-        let radius = self.a + self.b * shape_factor(self.c, chi);
-        let whorl = ((self.z_top - z) / self.whorl_spacing_m).floor();
-        let (whorl_cos, whorl_sin) = match whorl_rotation(whorl as usize) {
-            Some((c, s)) if self.whorl_step == GOLDEN_ANGLE => (
-                self.phase_cos * c - self.phase_sin * s,
-                self.phase_sin * c + self.phase_cos * s,
-            ),
-            _ => {
-                let (s, c) = (self.whorl_phase + whorl * self.whorl_step).sin_cos();
-                (c, s)
-            }
-        };
-        Some(CrownLevel {
-            radius_sq: radius * radius,
-            radius,
-            inv_radius: if radius > 0.0 { 1.0 / radius } else { 0.0 },
-            height_factor: if chi <= 0.5 { 1.0 } else { 2.0 * (1.0 - chi) },
-            whorl_cos,
-            whorl_sin,
-            uniform_density: self.uniform_density,
-        })
+        self.profile().level(z)
     }
 
     /// Relative foliage density (0–1) at `p`, 0 outside the envelope:
@@ -605,42 +673,19 @@ impl Crown {
         theta * height * (1.0 - rc)
     }
 
+    /// The crown's bounding cylinder (radius `a + b`, base to top).
+    pub fn bounds_cylinder(&self) -> VerticalCylinder {
+        VerticalCylinder {
+            axis: (self.axis_x, self.axis_y),
+            radius: self.max_radius_m(),
+            z: (self.z_base, self.z_top),
+        }
+    }
+
     /// The interval of `ray` inside the crown's bounding cylinder, within
     /// `(t_min, t_max)`.
     pub fn span(&self, ray: &Ray, t_min: f64, t_max: f64) -> Option<(f64, f64)> {
-        let r = self.max_radius_m();
-        let (ox, oy) = (ray.origin.x - self.axis_x, ray.origin.y - self.axis_y);
-        let (dx, dy) = (ray.dir.x, ray.dir.y);
-        let (mut t0, mut t1) = (t_min, t_max);
-        // Side of the cylinder.
-        let a = dx * dx + dy * dy;
-        if a < 1e-18 {
-            if ox * ox + oy * oy > r * r {
-                return None;
-            }
-        } else {
-            let b = ox * dx + oy * dy;
-            let c = ox * ox + oy * oy - r * r;
-            let disc = b * b - a * c;
-            if disc < 0.0 {
-                return None;
-            }
-            let sq = disc.sqrt();
-            t0 = t0.max((-b - sq) / a);
-            t1 = t1.min((-b + sq) / a);
-        }
-        // Caps.
-        if ray.dir.z.abs() < 1e-18 {
-            if ray.origin.z < self.z_base || ray.origin.z > self.z_top {
-                return None;
-            }
-        } else {
-            let ta = (self.z_base - ray.origin.z) / ray.dir.z;
-            let tb = (self.z_top - ray.origin.z) / ray.dir.z;
-            t0 = t0.max(ta.min(tb));
-            t1 = t1.min(ta.max(tb));
-        }
-        (t0 < t1).then_some((t0, t1))
+        self.bounds_cylinder().span(ray, t_min, t_max)
     }
 }
 

@@ -83,6 +83,8 @@ impl RunCounts {
 pub struct Simulator<'a> {
     survey: &'a Survey,
     caster: &'a dyn RayCaster,
+    /// The ground-class surfaces alone, when the world indexes them apart.
+    ground: Option<&'a dyn RayCaster>,
     lines: &'a [FlightLine],
     receiver: Receiver,
     detector: Detector,
@@ -155,6 +157,7 @@ impl<'a> Simulator<'a> {
         Self {
             survey,
             caster: world.index(),
+            ground: world.ground_index().map(|g| g as &dyn RayCaster),
             lines: &world.lines,
             beams: beams(&survey.scanner),
             discontinuity_m: crate::geometry::SPEED_OF_LIGHT_MPS * survey.receiver.pulse.fwhm_s()

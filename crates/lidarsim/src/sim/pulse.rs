@@ -18,13 +18,13 @@ use super::Simulator;
 use super::scratch::Scratch;
 use super::truth::{ReturnSource, dominant_surface};
 use super::{COMPONENT_FOLIAGE, COMPONENT_SURFACE, COMPONENT_TRUNK, NOISE_CLASS};
-use crate::accel::{Hit, PulseTrace, VolumeSpan};
+use crate::accel::{Hit, PulseTrace};
 use crate::canopy::Fate;
 use crate::geometry::{DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
 use crate::output::{NO_OBJECT, PointRecord};
 use crate::radiometry::surface_return;
 use crate::rng::{Purpose, Stream};
-use crate::scene::{Shape, SurfaceClass};
+use crate::scene::{MEDIUM_VEGETATION_MAX_M, Shape, SurfaceClass};
 use crate::sensor::Pose;
 use crate::sensor::beam::{BeamPattern, FINE_PER_CELL};
 use crate::sensor::navigation::observed_pose;
@@ -69,25 +69,20 @@ struct Rays<'a> {
 }
 
 impl Rays<'_> {
-    /// Calls `f` with each sub-ray's direction, energy share, closest hit
-    /// and crown spans.
+    /// Calls `f` with each sub-ray's direction, energy share and closest
+    /// hit.
     #[inline(always)]
-    fn each(&self, mut f: impl FnMut(&DVec3, f64, Option<Hit>, &[VolumeSpan])) {
+    fn each(&self, mut f: impl FnMut(&DVec3, f64, Option<Hit>)) {
         let mut j = 0;
         for (i, dir) in self.dirs.iter().enumerate() {
             if self.refine.get(i).copied().unwrap_or(false) {
                 for _ in 0..FINE_PER_CELL {
                     let (dir, share) = (&self.fine_dirs[j], self.fine[j].1);
-                    f(
-                        dir,
-                        share,
-                        self.fine_trace.hit(j),
-                        self.fine_trace.spans_of(j),
-                    );
+                    f(dir, share, self.fine_trace.hit(j));
                     j += 1;
                 }
             } else {
-                f(dir, self.share, self.trace.hit(i), self.trace.spans_of(i));
+                f(dir, self.share, self.trace.hit(i));
             }
         }
     }
@@ -177,7 +172,6 @@ impl Simulator<'_> {
         let Scratch {
             dirs,
             trace,
-            spans,
             refine,
             fine,
             fine_dirs,
@@ -192,7 +186,7 @@ impl Simulator<'_> {
             self.survey.scanner.max_range_m,
         );
         self.caster
-            .trace_pulse(em.origin, dirs, t_min, t_max, spans, trace);
+            .trace_pulse(em.origin, dirs, t_min, t_max, trace);
         let refined = pattern.refined() && self.mark_discontinuities(pattern, trace, refine);
         if refined {
             fine.clear();
@@ -202,7 +196,7 @@ impl Simulator<'_> {
             fine_dirs.clear();
             fine_dirs.extend(fine.iter().map(|(d, _)| to_world * *d));
             self.caster
-                .trace_pulse(em.origin, fine_dirs, t_min, t_max, spans, fine_trace);
+                .trace_pulse(em.origin, fine_dirs, t_min, t_max, fine_trace);
         }
         refined
     }
@@ -229,6 +223,7 @@ impl Simulator<'_> {
             returns,
             sources,
             canopy,
+            volumes,
             ..
         } = scratch;
         let scene = self.caster.scene();
@@ -253,7 +248,7 @@ impl Simulator<'_> {
             )
         };
         let share = pattern.share();
-        if !refined && trace.has_no_spans() {
+        if !refined && trace.has_no_volumes() {
             // No crown on any sub-ray's way and no cell sampled again:
             // every sub-ray brings all its energy to its surface.
             for (i, dir) in dirs.iter().enumerate() {
@@ -288,10 +283,27 @@ impl Simulator<'_> {
             fine_trace,
             share,
         };
-        rays.each(|dir, _, hit, crowns| {
-            canopy.push(*dir, t_min, hit.map_or(t_max, |h| h.t), crowns);
+        rays.each(|dir, _, hit| {
+            canopy.push(*dir, t_min, hit.map_or(t_max, |h| h.t));
         });
-        canopy.run(scene, em.origin, &self.canopy, &mut stream(Purpose::Canopy));
+        // The crowns of the fine samples' ways too, each once.
+        let crowns: &[u32] = if refined && !fine_trace.has_no_volumes() {
+            volumes.clear();
+            volumes.extend_from_slice(trace.volumes());
+            volumes.extend_from_slice(fine_trace.volumes());
+            volumes.sort_unstable();
+            volumes.dedup();
+            volumes
+        } else {
+            trace.volumes()
+        };
+        canopy.run(
+            scene,
+            em.origin,
+            crowns,
+            &self.canopy,
+            &mut stream(Purpose::Canopy),
+        );
         let fates = canopy.fates();
         let mut emit = |lane: usize, dir: &DVec3, share: f64, hit: Option<Hit>| {
             let (range_m, prim, mut power, normal) = match fates[lane] {
@@ -327,7 +339,7 @@ impl Simulator<'_> {
             sources.push(ReturnSource { prim, normal });
         };
         let mut k = 0;
-        rays.each(|dir, share, hit, _| {
+        rays.each(|dir, share, hit| {
             emit(k, dir, share, hit);
             k += 1;
         });
@@ -440,7 +452,8 @@ impl Simulator<'_> {
                         .map(|(_, src)| central.dot(src.normal).abs().min(1.0).acos().to_degrees());
                     let prim = &scene.primitives[p as usize];
                     let h = if prim.class == SurfaceClass::Vegetation {
-                        self.height_above_ground(truth)
+                        self.height_above_ground(truth, MEDIUM_VEGETATION_MAX_M)
+                            .unwrap_or(f64::INFINITY)
                     } else {
                         0.0
                     };
@@ -518,15 +531,21 @@ impl Simulator<'_> {
         any
     }
 
-    /// Height of `p` above the ground-class surface beneath it (infinite
-    /// when there is none).
-    pub fn height_above_ground(&self, p: DVec3) -> f64 {
+    /// Height of `p` above the ground-class surface beneath it, if one lies
+    /// within `limit_m` below it (a vegetation point's class needs to know
+    /// no more, and a short search stays among the primitives next to it).
+    pub fn height_above_ground(&self, p: DVec3, limit_m: f64) -> Option<f64> {
         let ray = Ray {
             origin: p + DVec3::Z * 0.01,
             dir: -DVec3::Z,
         };
-        self.caster
-            .closest_hit_where(&ray, 0.0, 1e5, &|prim| prim.class.is_ground())
-            .map_or(f64::INFINITY, |h| h.t - 0.01)
+        let ground = |prim: &crate::scene::Primitive| prim.class.is_ground();
+        match self.ground {
+            Some(g) => g.closest_hit(&ray, 0.0, limit_m + 0.01),
+            None => self
+                .caster
+                .closest_hit_where(&ray, 0.0, limit_m + 0.01, &ground),
+        }
+        .map(|h| h.t - 0.01)
     }
 }

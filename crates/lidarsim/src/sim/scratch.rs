@@ -2,7 +2,7 @@
 
 use super::frames::FrameCache;
 use super::truth::ReturnSource;
-use crate::accel::{PulseTrace, VolumeSpan};
+use crate::accel::PulseTrace;
 use crate::canopy::PulseMarch;
 use crate::detection::{DetectScratch, Echo};
 use crate::geometry::DVec3;
@@ -15,7 +15,7 @@ use crate::waveform::{Return, Waveform};
 pub struct Scratch {
     /// Sub-ray directions in the world frame.
     pub(super) dirs: Vec<DVec3>,
-    /// Their closest hits and crown spans.
+    /// Their closest hits and the crowns on their way.
     pub(super) trace: PulseTrace,
     /// Which sub-rays' cells are sampled again.
     pub(super) refine: Vec<bool>,
@@ -23,12 +23,12 @@ pub struct Scratch {
     pub(super) fine: Vec<(DVec3, f64)>,
     /// Their directions in the world frame.
     pub(super) fine_dirs: Vec<DVec3>,
-    /// Their closest hits and crown spans.
+    /// Their closest hits and the crowns on their way.
     pub(super) fine_trace: PulseTrace,
     /// The sub-rays' march through the crowns.
     pub(super) canopy: PulseMarch,
-    /// Working storage of the traversal.
-    pub(super) spans: Vec<VolumeSpan>,
+    /// The crowns on the ways of a pulse's sub-rays and fine samples.
+    pub(super) volumes: Vec<u32>,
     /// Sub-ray returns: range and power.
     pub(super) returns: Vec<Return>,
     /// Where each return came from, parallel to `returns`.

@@ -39,6 +39,10 @@ pub fn from_toml(text: &str, path: Option<&Path>) -> Result<(Survey, World), Sur
 /// The scene of a survey, indexed, and its flight lines.
 pub struct World {
     index: Bvh,
+    /// The ground-class surfaces indexed apart, when the scene has
+    /// vegetation: the class of a vegetation point depends on the ground
+    /// below it, which a search among the ground alone finds at once.
+    ground: Option<Bvh>,
     /// Flight lines in flight order.
     pub lines: Vec<FlightLine>,
     /// Trees placed by each `[[forest]]` entry.
@@ -79,8 +83,10 @@ impl World {
         if !problems.is_empty() {
             return Err(survey.diagnose(problems));
         }
+        let ground = ground_index(built.index.scene());
         Ok(World {
             index: built.index,
+            ground,
             lines,
             forest_trees: built.forest_trees,
             warnings: built.warnings,
@@ -91,6 +97,12 @@ impl World {
     /// The index of the scene (its closest-hit queries).
     pub fn index(&self) -> &Bvh {
         &self.index
+    }
+
+    /// The index of the ground-class surfaces alone, when the scene has
+    /// vegetation (whose points' classes depend on the ground below them).
+    pub fn ground_index(&self) -> Option<&Bvh> {
+        self.ground.as_ref()
     }
 
     /// The scene, in the index's order.
@@ -104,6 +116,30 @@ impl World {
         w.extend(self.warnings.iter().cloned());
         w
     }
+}
+
+/// The index of `scene`'s ground-class surfaces, if the scene has
+/// vegetation.
+fn ground_index(scene: &Scene) -> Option<Bvh> {
+    use crate::scene::SurfaceClass;
+    if !scene
+        .primitives
+        .iter()
+        .any(|p| p.class == SurfaceClass::Vegetation)
+    {
+        return None;
+    }
+    let ground = Scene {
+        primitives: scene
+            .primitives
+            .iter()
+            .filter(|p| p.class.is_ground())
+            .cloned()
+            .collect(),
+        materials: scene.materials.clone(),
+        objects: Vec::new(),
+    };
+    Some(Bvh::build(ground))
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@
 
 use super::ray::nearest_on_top;
 use super::{Bvh, Pending};
-use crate::accel::{Nearest, PulseTrace, VolumeSpan, finish_spans, make_hit, volume_span};
+use crate::accel::{Nearest, PulseTrace};
 use crate::geometry::{DVec3, Ray};
 use crate::kernels::{BundleSlabs, DirectionBounds, EdgeCone, Sign, direction_bounds};
 use crate::scene::{Coverage, EdgeTest, Shape, Straddle, Triangle, TriangleFan, bundle_cone};
@@ -23,7 +23,6 @@ impl Bvh {
         dirs: &[DVec3],
         t_min: f64,
         t_max: f64,
-        spans: &mut Vec<VolumeSpan>,
         out: &mut PulseTrace,
     ) {
         // The previous pulse's hits are reset in place, distance and
@@ -68,6 +67,12 @@ impl Bvh {
                     }
                     if let Shape::Triangle(tri) = &prim.shape {
                         missing -= bundle_triangle(tri, p, dirs, &cone, t_min, &mut best);
+                        continue;
+                    }
+                    // A stem the whole cone misses costs one test.
+                    if let Some(cylinder) = prim.bounds_cylinder()
+                        && !cylinder.may_meet_cone(origin, axis, spread, t_min, far)
+                    {
                         continue;
                     }
                     for (dir, b) in dirs.iter().zip(best.iter_mut()) {
@@ -148,13 +153,8 @@ impl Bvh {
         // Triangle hits carry their normal, already facing the ray, from the
         // test; other sub-rays mostly hit the same flat primitive, whose
         // normal is computed once.
-        let mut flat: Option<(u32, DVec3)> = None;
-        if volumes.is_empty() {
-            if !normals_missing {
-                out.hits = best;
-                out.volumes = volumes;
-                return;
-            }
+        if normals_missing {
+            let mut flat: Option<(u32, DVec3)> = None;
             for (dir, b) in dirs.iter().zip(best.iter_mut()) {
                 let Some(p) = b.prim() else {
                     continue;
@@ -175,27 +175,19 @@ impl Bvh {
                 };
                 b.normal = if n.dot(*dir) > 0.0 { -n } else { n };
             }
-            out.hits = best;
-            out.volumes = volumes;
-            return;
         }
-        for (dir, b) in dirs.iter().zip(best.iter_mut()) {
-            let ray = Ray { origin, dir: *dir };
-            spans.clear();
-            for &v in &volumes {
-                if let Some(s) =
-                    volume_span(&self.scene.primitives[v as usize], v, &ray, t_min, b.t)
-                {
-                    spans.push(s);
-                }
-            }
-            finish_spans(spans, b.t);
-            out.push_spans(spans);
-            if let Some(p) = b.prim()
-                && b.normal.x.is_nan()
-            {
-                b.normal = make_hit(&self.scene, p, &ray, b.t).normal;
-            }
+        // The volumes reached: those the bundle may cross before its
+        // farthest hit.
+        if !volumes.is_empty() {
+            let t_far = best
+                .iter()
+                .fold(t_min, |m, b| if b.t > m { b.t } else { m });
+            let prims = &self.scene.primitives;
+            volumes.retain(|&v| {
+                prims[v as usize]
+                    .bounds_cylinder()
+                    .is_none_or(|c| c.may_meet_cone(origin, axis, spread, t_min, t_far))
+            });
         }
         out.hits = best;
         out.volumes = volumes;

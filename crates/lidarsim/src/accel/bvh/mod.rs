@@ -235,22 +235,21 @@ impl RayCaster for Bvh {
 
     /// The sub-rays of a pulse share their origin and lie within a narrow
     /// cone: the hierarchy is traversed once for the whole bundle
-    /// (bundle.rs). The answers are those of [`RayCaster::trace`] for each
-    /// sub-ray.
+    /// (bundle.rs). The hits are those of [`RayCaster::trace`] for each
+    /// sub-ray, and the volumes those the bundle's cone may cross.
     fn trace_pulse(
         &self,
         origin: DVec3,
         dirs: &[DVec3],
         t_min: f64,
         t_max: f64,
-        spans: &mut Vec<VolumeSpan>,
         out: &mut PulseTrace,
     ) {
         if self.nodes.is_empty() || dirs.len() < 2 {
-            self.trace_each(origin, dirs, t_min, t_max, spans, out);
+            self.trace_each(origin, dirs, t_min, t_max, out);
             return;
         }
-        self.trace_bundle(origin, dirs, t_min, t_max, spans, out);
+        self.trace_bundle(origin, dirs, t_min, t_max, out);
     }
 }
 
