@@ -6,7 +6,8 @@
 //! the species' height curve and the crown base from its live crown ratio
 //! (±15 %).
 
-use super::tree::{Species, TreeSpec};
+use super::Species;
+use super::tree::TreeSpec;
 use crate::geometry::DVec3;
 use crate::rng::{Purpose, Stream};
 use rayon::prelude::*;

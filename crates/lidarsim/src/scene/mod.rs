@@ -11,12 +11,14 @@
 pub mod cloud;
 pub mod forest;
 mod polygon;
+mod species;
 pub mod terrain;
 pub mod tree;
 mod triangle;
 
 pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
-pub use tree::{Crown, CrownLevel, CrownProfile, Species, TreeSpec, Trunk};
+pub use species::{Species, SpeciesPreset};
+pub use tree::{Crown, CrownLevel, CrownProfile, TreeSpec, Trunk};
 pub use triangle::{
     Coverage, EdgeTest, Straddle, Triangle, TriangleFan, bundle_cone, bundle_spread,
 };

@@ -10,6 +10,7 @@
 //! the three factors that follow it). Sub-rays march through crowns and are
 //! intercepted by a lottery (see [`crate::canopy`]).
 
+use super::species::Species;
 use crate::geometry::{Aabb, DVec3, Ray, VerticalCylinder};
 
 /// The rotation of the branch pattern from one whorl to the next: the
@@ -18,164 +19,6 @@ pub const GOLDEN_ANGLE: f64 = 0.763_932_022_500_210_2 * std::f64::consts::PI;
 
 /// Height at which dbh is measured, m.
 pub const BREAST_HEIGHT_M: f64 = 1.3;
-
-/// Tree species with presets for crown shape and allometry.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Species {
-    /// Scots pine, *Pinus sylvestris*.
-    Pine,
-    /// Norway spruce, *Picea abies*.
-    Spruce,
-    /// Silver birch, *Betula pendula* (in leaf).
-    Birch,
-}
-
-/// Species parameters; the numbers and their sources are in
-/// `docs/trees.md`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SpeciesPreset {
-    /// Crown shape exponent `c` of Eq. 4.
-    pub shape_c: f64,
-    /// Flat-top constant `a` of Eq. 4 as a fraction of the crown radius.
-    pub flat_top_fraction: f64,
-    /// Crown radius allometry of forest-grown trees (Jakobsons 1970):
-    /// `a + b = r0 + r1 · dbh_cm`, m.
-    pub crown_r0_m: f64,
-    /// Slope of the crown radius allometry, m per cm of dbh.
-    pub crown_r1_m_per_cm: f64,
-    /// Interception coefficient `k` of `1 − exp(−k·ρ·Δs)`, 1/m.
-    pub extinction_per_m: f64,
-    /// Foliage reflectance at 1064 nm.
-    pub foliage_reflectance: f64,
-    /// Bark reflectance at 1064 nm.
-    pub bark_reflectance: f64,
-    /// Height curve of Pukkala, Lähde & Laiho (2009):
-    /// `h = A / (1 + b1/d + b2/d²)`, d in cm, h in m.
-    pub height_a_m: f64,
-    /// `b1` of the height curve, cm.
-    pub height_b1: f64,
-    /// `b2` of the height curve, cm².
-    pub height_b2: f64,
-    /// Typical live crown ratio (crown length / height).
-    pub crown_ratio: f64,
-}
-
-impl Species {
-    /// All species with their names in survey files.
-    pub const ALL: [(&'static str, Species); 3] = [
-        ("pine", Species::Pine),
-        ("spruce", Species::Spruce),
-        ("birch", Species::Birch),
-    ];
-
-    /// Parses a species name (also the Latin binomial and common aliases).
-    pub fn from_name(name: &str) -> Option<Self> {
-        match name.trim().to_ascii_lowercase().as_str() {
-            "pine" | "scots pine" | "scots_pine" | "pinus sylvestris" => Some(Species::Pine),
-            "spruce" | "norway spruce" | "norway_spruce" | "picea abies" => Some(Species::Spruce),
-            "birch" | "silver birch" | "silver_birch" | "betula pendula" => Some(Species::Birch),
-            _ => None,
-        }
-    }
-
-    /// The name used in survey files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Species::Pine => "pine",
-            Species::Spruce => "spruce",
-            Species::Birch => "birch",
-        }
-    }
-
-    /// The preset of this species (sources in `docs/trees.md`).
-    pub fn preset(self) -> SpeciesPreset {
-        match self {
-            Species::Pine => SpeciesPreset {
-                shape_c: 0.6,
-                flat_top_fraction: 0.1,
-                crown_r0_m: 0.519,
-                crown_r1_m_per_cm: 0.0744,
-                extinction_per_m: 1.8,
-                foliage_reflectance: 0.42,
-                bark_reflectance: 0.35,
-                height_a_m: 32.694,
-                height_b1: 19.260,
-                height_b2: 31.721,
-                crown_ratio: 0.43,
-            },
-            Species::Spruce => SpeciesPreset {
-                shape_c: 0.9,
-                flat_top_fraction: 0.02,
-                crown_r0_m: 0.761,
-                crown_r1_m_per_cm: 0.060,
-                extinction_per_m: 2.8,
-                foliage_reflectance: 0.40,
-                bark_reflectance: 0.30,
-                height_a_m: 39.691,
-                height_b1: 25.683,
-                height_b2: 37.785,
-                crown_ratio: 0.70,
-            },
-            Species::Birch => SpeciesPreset {
-                shape_c: 0.5,
-                flat_top_fraction: 0.1,
-                crown_r0_m: 0.750,
-                crown_r1_m_per_cm: 0.0875,
-                extinction_per_m: 2.5,
-                foliage_reflectance: 0.48,
-                bark_reflectance: 0.50,
-                height_a_m: 37.089,
-                height_b1: 22.640,
-                height_b2: -8.0,
-                crown_ratio: 0.52,
-            },
-        }
-    }
-
-    /// Maximum crown radius (m) of a tree of this species with the given dbh.
-    pub fn crown_radius_m(self, dbh_m: f64) -> f64 {
-        let p = self.preset();
-        p.crown_r0_m + p.crown_r1_m_per_cm * dbh_m * 100.0
-    }
-
-    /// Height (m) of a tree with the given dbh from the height curve.
-    pub fn height_from_dbh_m(self, dbh_m: f64) -> f64 {
-        let p = self.preset();
-        let d = dbh_m * 100.0;
-        p.height_a_m / (1.0 + p.height_b1 / d + p.height_b2 / (d * d))
-    }
-
-    /// Range of dbh over which the height curve is used, m: 3–80 cm, the
-    /// span of the data such curves are fitted to.
-    pub const DBH_RANGE_M: (f64, f64) = (0.03, 0.8);
-
-    /// dbh (m) of a tree of the given height: the height curve inverted by
-    /// bisection over [`Species::DBH_RANGE_M`] (it increases with d there).
-    /// Heights outside the curve's range over those diameters give `None`.
-    pub fn dbh_from_height_m(self, height_m: f64) -> Option<f64> {
-        let (mut lo, mut hi) = Self::DBH_RANGE_M;
-        if height_m < self.height_from_dbh_m(lo) || height_m > self.height_from_dbh_m(hi) {
-            return None;
-        }
-        for _ in 0..80 {
-            let mid = 0.5 * (lo + hi);
-            let (l, h) = if self.height_from_dbh_m(mid) < height_m {
-                (mid, hi)
-            } else {
-                (lo, mid)
-            };
-            // Once the interval stops changing it never changes again (the
-            // step depends on it alone): the same answer as all 80 steps,
-            // after about 55.
-            if (l, h) == (lo, hi) {
-                break;
-            }
-            (lo, hi) = (l, h);
-        }
-        Some(0.5 * (lo + hi))
-    }
-}
 
 /// A tree as described in a survey.
 #[derive(Clone, Debug, PartialEq)]
@@ -693,30 +536,6 @@ impl Crown {
 mod tests {
     use super::*;
 
-    /// The bisection of [`Species::dbh_from_height_m`] stops once its
-    /// interval stops changing: the same answer as all 80 halvings.
-    #[test]
-    fn dbh_bisection_stops_at_the_answer_of_80_halvings() {
-        for species in [Species::Pine, Species::Spruce, Species::Birch] {
-            let (d0, d1) = Species::DBH_RANGE_M;
-            let (h0, h1) = (species.height_from_dbh_m(d0), species.height_from_dbh_m(d1));
-            for k in 0..=2000 {
-                let h = h0 + (h1 - h0) * k as f64 / 2000.0;
-                let (mut lo, mut hi) = (d0, d1);
-                for _ in 0..80 {
-                    let mid = 0.5 * (lo + hi);
-                    if species.height_from_dbh_m(mid) < h {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                let want = 0.5 * (lo + hi);
-                assert_eq!(species.dbh_from_height_m(h), Some(want), "{species:?} {h}");
-            }
-        }
-    }
-
     fn pine() -> TreeSpec {
         TreeSpec::new(DVec3::new(10.0, 20.0, 5.0), Species::Pine, 0.25, 18.0, 8.0)
     }
@@ -811,28 +630,5 @@ mod tests {
         assert!((a - (60.0 - r)).abs() < 1e-9 && (b - (60.0 + r)).abs() < 1e-9);
         let off = Ray::new(DVec3::new(10.0 + r + 0.1, 20.0, 100.0), -DVec3::Z);
         assert!(crown.span(&off, 0.0, 1e9).is_none());
-    }
-
-    #[test]
-    fn allometry_matches_the_published_values() {
-        // Jakobsons (1970) forest-grown crown radii at dbh 20 and 40 cm, and
-        // Pukkala et al. (2009) heights, as tabulated in docs/trees.md.
-        let cases = [
-            (Species::Pine, 2.007, 3.495, 16.0, 21.8),
-            (Species::Spruce, 1.961, 3.161, 16.7, 23.8),
-            (Species::Birch, 2.500, 4.250, 17.6, 23.8),
-        ];
-        for (s, r20, r40, h20, h40) in cases {
-            assert!((s.crown_radius_m(0.2) - r20).abs() < 0.01, "{s:?}");
-            assert!((s.crown_radius_m(0.4) - r40).abs() < 0.01, "{s:?}");
-            assert!((s.height_from_dbh_m(0.2) - h20).abs() < 0.1, "{s:?}");
-            assert!((s.height_from_dbh_m(0.4) - h40).abs() < 0.1, "{s:?}");
-            for d in [0.1, 0.2, 0.35] {
-                let back = s.dbh_from_height_m(s.height_from_dbh_m(d)).unwrap();
-                assert!((back - d).abs() < 1e-9, "{s:?} {d} {back}");
-            }
-        }
-        assert!(Species::Pine.dbh_from_height_m(40.0).is_none());
-        assert!(Species::Birch.dbh_from_height_m(2.0).is_none());
     }
 }

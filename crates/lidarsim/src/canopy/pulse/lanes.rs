@@ -198,18 +198,35 @@ impl Lanes {
         self.level.fill(0.0);
     }
 
+    /// Sets each lane's level depth to its optical depth `k·ρ·Δs_i` in
+    /// `cell` (0 for a lane not open).
+    #[inline(always)]
+    pub(super) fn set_cell(&mut self, cell: &Cell) {
+        match cell.level.uniform {
+            None => self.with_cell(cell, |l, dx, dy| l.density(dx, dy), |_, t| t),
+            Some(u) => self.with_cell(cell, |l, dx, dy| l.uniform(u, dx, dy), |_, t| t),
+        }
+    }
+
     /// Adds each open lane's optical depth `k·ρ·Δs_i` in `cell` to its
     /// level depth.
     #[inline(always)]
     pub(super) fn add_cell(&mut self, cell: &Cell) {
         match cell.level.uniform {
-            None => self.add_with(cell, |l, dx, dy| l.density(dx, dy)),
-            Some(u) => self.add_with(cell, |l, dx, dy| l.uniform(u, dx, dy)),
+            None => self.with_cell(cell, |l, dx, dy| l.density(dx, dy), |a, t| a + t),
+            Some(u) => self.with_cell(cell, |l, dx, dy| l.uniform(u, dx, dy), |a, t| a + t),
         }
     }
 
+    /// Each lane's level depth `combine(level, tau)`, `tau` its depth in
+    /// `cell` with density `rho`.
     #[inline(always)]
-    fn add_with(&mut self, cell: &Cell, rho: impl Fn(&Level32, f32, f32) -> f32) {
+    fn with_cell(
+        &mut self,
+        cell: &Cell,
+        rho: impl Fn(&Level32, f32, f32) -> f32,
+        combine: impl Fn(f32, f32) -> f32,
+    ) {
         let (px, py) = cell.centre;
         let (l, k, dz) = (&cell.level, cell.k, cell.dz);
         let n = self.len();
@@ -220,7 +237,7 @@ impl Lanes {
             let (dx, dy) = (px + sx[i] * dz, py + sy[i] * dz);
             let open = (dz > bottom[i]) & (dz <= top[i]);
             let tau = k * rho(l, dx, dy) * step[i];
-            level[i] += if open { tau } else { 0.0 };
+            level[i] = combine(level[i], if open { tau } else { 0.0 });
         }
     }
 
@@ -239,36 +256,38 @@ impl Lanes {
         if open { tau } else { 0.0 }
     }
 
-    /// Adds the level depths of the register at lane `c` to the lanes'
-    /// depths, except for the lanes whose depth would reach their
-    /// threshold; returns those as a mask (bit `l` for lane `c + l`), their
-    /// depth unchanged.
+    /// Adds the level depths to the lanes' depths, except for the lanes
+    /// whose depth would reach their threshold: those are listed in
+    /// `reached` (cleared first), their depth unchanged.
     #[inline(always)]
-    pub(super) fn advance(&mut self, c: usize) -> u32 {
-        let depth: &mut [f32; W] = (&mut self.depth[c..c + W]).try_into().expect("a register");
-        let level: &[f32; W] = self.level[c..c + W].try_into().expect("a register");
-        let threshold: &[f32; W] = self.threshold[c..c + W].try_into().expect("a register");
-        // The usual case, no lane reaching its threshold, in two loops
-        // that vectorise (an or-reduction, an addition).
-        let mut any = false;
-        for l in 0..W {
-            any |= depth[l] + level[l] >= threshold[l];
-        }
-        if !any {
+    pub(super) fn advance(&mut self, reached: &mut Vec<usize>) {
+        reached.clear();
+        let registers = self
+            .depth
+            .chunks_exact_mut(W)
+            .zip(self.level.chunks_exact(W))
+            .zip(self.threshold.chunks_exact(W));
+        for (c, ((depth, level), threshold)) in registers.enumerate() {
+            // The usual case, no lane reaching its threshold, in two loops
+            // that vectorise (an or-reduction, an addition).
+            let mut any = false;
             for l in 0..W {
-                depth[l] += level[l];
+                any |= depth[l] + level[l] >= threshold[l];
             }
-            return 0;
-        }
-        let mut mask = 0u32;
-        for l in 0..W {
-            if depth[l] + level[l] >= threshold[l] {
-                mask |= 1 << l;
-            } else {
-                depth[l] += level[l];
+            if !any {
+                for l in 0..W {
+                    depth[l] += level[l];
+                }
+                continue;
+            }
+            for l in 0..W {
+                if depth[l] + level[l] >= threshold[l] {
+                    reached.push(c * W + l);
+                } else {
+                    depth[l] += level[l];
+                }
             }
         }
-        mask
     }
 
     /// The horizontal offset from the centre line per metre below the

@@ -80,6 +80,8 @@ pub struct PulseMarch {
     transmission: Vec<f64>,
     met: Vec<Met>,
     rows: Vec<Row>,
+    /// The lanes that reach their threshold at a level.
+    reached: Vec<usize>,
     spans: Vec<VolumeSpan>,
     fates: Vec<Fate>,
 }
@@ -275,14 +277,16 @@ impl PulseMarch {
                 let crown = m.profile.crown();
                 let (ax, ay) = crown.axis();
                 let (px, py) = (o.x - ax + cx * dz, o.y - ay + cy * dz);
-                let centre = (px * px + py * py).sqrt();
-                if centre - reach > crown.max_radius_m() {
+                // Squared: is the centre farther than `radius + reach`?
+                let centre_sq = px * px + py * py;
+                let beyond = |radius: f64| centre_sq > (radius + reach) * (radius + reach);
+                if beyond(crown.max_radius_m()) {
                     continue;
                 }
                 let Some(level) = m.profile.level(z) else {
                     continue;
                 };
-                if centre - reach > level.radius {
+                if beyond(level.radius) {
                     continue;
                 }
                 self.rows.push(Row {
@@ -298,8 +302,7 @@ impl PulseMarch {
             let Some((first, rest)) = self.rows.split_first() else {
                 continue;
             };
-            self.lanes.level.fill(0.0);
-            self.lanes.add_cell(&first.cell);
+            self.lanes.set_cell(&first.cell);
             for row in rest {
                 self.lanes.add_cell(&row.cell);
             }
@@ -314,16 +317,13 @@ impl PulseMarch {
             }
             // Add the level's depths; the lanes that reach their threshold
             // are intercepted in this cell.
-            for c in (0..self.lanes.len()).step_by(W) {
-                let mut reached = self.lanes.advance(c);
-                while reached != 0 {
-                    let i = c + reached.trailing_zeros() as usize;
-                    reached &= reached - 1;
-                    let lane = self.lanes.lane[i] as usize;
-                    self.fates[lane] = self.intercept(o, i, lane, dz);
-                    self.lanes.close(i);
-                    open -= 1;
-                }
+            self.lanes.advance(&mut self.reached);
+            for k in 0..self.reached.len() {
+                let i = self.reached[k];
+                let lane = self.lanes.lane[i] as usize;
+                self.fates[lane] = self.intercept(o, i, lane, dz);
+                self.lanes.close(i);
+                open -= 1;
             }
             if open * 2 <= self.lanes.len() && self.lanes.len() > W {
                 self.lanes.compact();
