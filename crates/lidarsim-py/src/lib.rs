@@ -7,7 +7,9 @@
 mod convert;
 mod points;
 mod run;
+mod stream;
 mod survey;
+mod waveform;
 
 use pyo3::exceptions::PyImportError;
 use pyo3::prelude::*;
@@ -37,5 +39,6 @@ fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("POINT_RECORD_BYTES", points::RECORD_BYTES)?;
     m.add("TRAJECTORY_FIELDS", points::TRAJECTORY_FIELDS.to_vec())?;
     m.add_class::<survey::SurveyCore>()?;
+    m.add_class::<stream::PointStream>()?;
     Ok(())
 }

@@ -81,7 +81,7 @@ impl Watch {
     }
 }
 
-fn check_threads(threads: usize) -> PyResult<()> {
+pub fn check_threads(threads: usize) -> PyResult<()> {
     if threads == 0 {
         return Err(PyValueError::new_err(
             "threads must be at least 1 (None uses every core)",

@@ -194,6 +194,34 @@ impl SurveyCore {
         crate::run::run(py, self, threads, progress)
     }
 
+    /// A streamed run: see `stream.rs`.
+    #[pyo3(signature = (threads, min_points))]
+    fn stream(
+        &self,
+        py: Python<'_>,
+        threads: usize,
+        min_points: usize,
+    ) -> PyResult<crate::stream::PointStream> {
+        crate::run::check_threads(threads)?;
+        let world = self.world(py)?;
+        Ok(crate::stream::PointStream::start(
+            Arc::clone(&self.survey),
+            world,
+            threads,
+            min_points,
+        ))
+    }
+
+    /// One pulse's waveform: see `waveform.rs`.
+    fn waveform<'py>(
+        &self,
+        py: Python<'py>,
+        line: usize,
+        pulse: u64,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        crate::waveform::waveform(py, self, line, pulse)
+    }
+
     /// A run into a directory: see `run.rs`.
     #[pyo3(signature = (out_dir, threads, progress=None, overwrite=false, resume=false, no_space_check=false))]
     #[allow(clippy::too_many_arguments)]

@@ -10,6 +10,9 @@ NumPy structured array with the fields of the LAS file::
     result.points["z"], result.points["classification"]
     las = result.to_laspy()            # needs laspy
     survey.run_to("out")               # the files of `lidarsim run`
+    for block in survey.stream():      # a flight of any length, in blocks
+        ...
+    w = survey.waveform(line=0, pulse=1000)   # one pulse's full waveform
 
 A survey with problems raises :class:`SurveyError`, whose message names
 every key at fault. The simulation runs with the GIL released on every
@@ -22,7 +25,7 @@ import copy
 import os
 import sys
 from pathlib import Path
-from typing import Any, Callable, Dict, Mapping, Optional, Union
+from typing import Any, Callable, Dict, Iterator, Mapping, Optional, Union
 
 import numpy as np
 
@@ -35,6 +38,7 @@ __all__ = [
     "Result",
     "Survey",
     "SurveyError",
+    "Waveform",
     "__version__",
 ]
 
@@ -225,6 +229,44 @@ class Survey:
             las_header=raw["las"],
         )
 
+    def stream(
+        self,
+        block_points: int = 1_000_000,
+        threads: Optional[int] = None,
+        seed: Optional[int] = None,
+        progress: Progress = True,
+    ) -> Iterator[np.ndarray]:
+        """Simulates every pulse and yields the points in blocks of at least
+        ``block_points`` (the last may hold fewer), in the order of
+        :meth:`run`'s ``points``: memory stays that of a few blocks however
+        long the flight. The simulation runs ahead of the loop by at most
+        two blocks. Leaving the loop early stops it; Ctrl-C raises
+        ``KeyboardInterrupt``."""
+        if block_points < 1:
+            raise ValueError(f"block_points must be at least 1, got {block_points}")
+        survey = self._with_seed(seed)
+        callback, bar = _progress(progress, "simulating")
+        stream = survey._core.stream(_threads(threads), int(block_points))
+        try:
+            for block in stream:
+                if callback is not None:
+                    callback(stream.pulses_done, stream.pulses_total)
+                yield block.view(POINT_DTYPE)
+            if callback is not None:
+                callback(stream.pulses_total, stream.pulses_total)
+        finally:
+            stream.close()
+            if bar is not None:
+                bar.close()
+
+    def waveform(self, line: int, pulse: int) -> "Waveform":
+        """The full waveform of pulse ``pulse`` of flight line ``line``
+        (both from 0), simulated on its own: the same pulse, to the bit, as
+        in a run (every random number is keyed by the pulse)."""
+        if line < 0 or pulse < 0:
+            raise IndexError(f"line and pulse are numbered from 0, got {line}, {pulse}")
+        return Waveform(self._core.waveform(int(line), int(pulse)))
+
     def run_to(
         self,
         out_dir: PathLike,
@@ -250,6 +292,44 @@ class Survey:
         finally:
             if bar is not None:
                 bar.close()
+
+
+class Waveform:
+    """One pulse's full waveform (:meth:`Survey.waveform`).
+
+    ``time_ns``: two-way travel time of each sample; ``range_m``: the same
+    as range; ``samples``: the received signal (amplitude units: sub-ray
+    returns convolved with the emitted pulse, plus atmosphere and noise);
+    ``background``: the atmosphere's expected part of it; ``threshold``:
+    the detection threshold above the background. ``returns_range_m`` and
+    ``returns_power``: the sub-ray returns the signal is made of (Eq. 2 per
+    sub-ray). ``echo_range_m``, ``echo_amplitude`` (energy amplitude, the
+    LAS intensity's), ``echo_peak_amplitude`` and ``echo_width_ns``: the
+    echoes detected. ``points``: the points they give
+    (:data:`POINT_DTYPE`). ``emitted``: False for a pulse slot in which a
+    polygon scanner fires nothing.
+    """
+
+    def __init__(self, raw: Dict[str, Any]) -> None:
+        self.emitted: bool = raw["emitted"]
+        self.time_ns: np.ndarray = raw["time_ns"]
+        self.range_m: np.ndarray = raw["range_m"]
+        self.samples: np.ndarray = raw["samples"]
+        self.background: np.ndarray = raw["background"]
+        self.threshold: float = raw["threshold"]
+        self.returns_range_m: np.ndarray = raw["returns_range_m"]
+        self.returns_power: np.ndarray = raw["returns_power"]
+        self.echo_range_m: np.ndarray = raw["echo_range_m"]
+        self.echo_amplitude: np.ndarray = raw["echo_amplitude"]
+        self.echo_peak_amplitude: np.ndarray = raw["echo_peak_amplitude"]
+        self.echo_width_ns: np.ndarray = raw["echo_width_ns"]
+        self.points: np.ndarray = raw["points"].view(POINT_DTYPE)
+
+    def __repr__(self) -> str:
+        return (
+            f"<lidarsim.Waveform: {len(self.samples)} samples, "
+            f"{len(self.returns_power)} sub-ray returns, {len(self.echo_range_m)} echoes>"
+        )
 
 
 class Result:

@@ -1,6 +1,8 @@
 """Type stubs of the compiled half of lidarsim (use the `lidarsim` API)."""
 
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
+
+import numpy as np
 
 VERSION: str
 POINT_FIELDS: List[Tuple[str, str]]
@@ -9,6 +11,13 @@ TRAJECTORY_FIELDS: List[Tuple[str, str]]
 
 class SurveyError(ValueError):
     diagnostics: List[Dict[str, Any]]
+
+class PointStream(Iterator["np.ndarray"]):
+    pulses_done: int
+    pulses_total: int
+    def __iter__(self) -> "PointStream": ...
+    def __next__(self) -> "np.ndarray": ...
+    def close(self) -> None: ...
 
 class SurveyCore:
     @staticmethod
@@ -37,3 +46,5 @@ class SurveyCore:
         resume: bool = False,
         no_space_check: bool = False,
     ) -> Dict[str, Any]: ...
+    def stream(self, threads: int, min_points: int) -> PointStream: ...
+    def waveform(self, line: int, pulse: int) -> Dict[str, Any]: ...
