@@ -7,6 +7,7 @@
 mod convert;
 mod points;
 mod run;
+mod scene_data;
 mod stream;
 mod survey;
 mod waveform;

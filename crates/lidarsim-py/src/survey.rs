@@ -4,6 +4,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use lidarsim::{Survey, World};
+use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -59,6 +60,12 @@ impl SurveyCore {
             world: Mutex::new(None),
             from_dict,
         }
+    }
+
+    /// A core for `survey`, derived from this one's (same kind of
+    /// messages).
+    pub(crate) fn derived(&self, survey: Survey) -> Self {
+        Self::new(survey, self.from_dict)
     }
 
     /// The survey's world, built (with the GIL released) on first use.
@@ -192,6 +199,61 @@ impl SurveyCore {
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         crate::run::run(py, self, threads, progress)
+    }
+
+    /// A new survey with a mesh from arrays: see `scene_data.rs`.
+    #[pyo3(signature = (vertices, faces, material, class_name, offset_m, scale, rotation_z_deg))]
+    #[allow(clippy::too_many_arguments)]
+    fn with_mesh(
+        &self,
+        py: Python<'_>,
+        vertices: PyReadonlyArray2<'_, f64>,
+        faces: PyReadonlyArray2<'_, i64>,
+        material: &str,
+        class_name: &str,
+        offset_m: [f64; 3],
+        scale: f64,
+        rotation_z_deg: f64,
+    ) -> PyResult<SurveyCore> {
+        self.mesh_from_arrays(
+            py,
+            vertices,
+            faces,
+            material,
+            class_name,
+            offset_m,
+            scale,
+            rotation_z_deg,
+        )
+    }
+
+    /// A new survey with a terrain from a height array: see
+    /// `scene_data.rs`.
+    #[pyo3(signature = (heights, transform, material, class_name, nodata))]
+    fn with_terrain(
+        &self,
+        py: Python<'_>,
+        heights: PyReadonlyArray2<'_, f64>,
+        transform: [f64; 6],
+        material: &str,
+        class_name: &str,
+        nodata: Option<f64>,
+    ) -> PyResult<SurveyCore> {
+        self.terrain_from_array(py, heights, transform, material, class_name, nodata)
+    }
+
+    /// A new survey with a point cloud from arrays: see `scene_data.rs`.
+    #[pyo3(signature = (points, voxel_m, material, class_name, classes))]
+    fn with_point_cloud(
+        &self,
+        py: Python<'_>,
+        points: PyReadonlyArray2<'_, f64>,
+        voxel_m: f64,
+        material: &str,
+        class_name: Option<&str>,
+        classes: Option<PyReadonlyArray1<'_, u8>>,
+    ) -> PyResult<SurveyCore> {
+        self.cloud_from_arrays(py, points, voxel_m, material, class_name, classes)
     }
 
     /// A streamed run: see `stream.rs`.

@@ -76,6 +76,133 @@ pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
     raw
 }
 
+/// A scene entry given as data, and the file a run writes it to beside
+/// its `survey.toml` (a path relative to the output directory).
+#[derive(Clone, Debug)]
+pub struct DataFile {
+    /// Where it goes, relative to the output directory (`scene/...`).
+    pub path: String,
+    /// What it holds.
+    pub entry: DataEntry,
+}
+
+/// The entry a [`DataFile`] holds.
+#[derive(Clone, Debug)]
+pub enum DataEntry {
+    /// A `[[mesh]]` given as data.
+    Mesh(crate::survey::spec::MeshEntry),
+    /// A `[[terrain]]` given as data.
+    Terrain(crate::survey::spec::TerrainEntry),
+    /// A `[[point_cloud]]` given as data.
+    Cloud(crate::survey::spec::CloudEntry),
+}
+
+/// The scene entries of `survey` given as data ([`crate::survey::data`]),
+/// each with the file it is written to: `scene/mesh-I.obj` (the vertices
+/// placed), `scene/terrain-I.tif`, `scene/point_cloud-I.xyz`, `I` the
+/// entry's index in its table.
+pub fn data_files(survey: &Survey) -> Vec<DataFile> {
+    let spec = &survey.scene_spec;
+    let meshes = spec
+        .meshes
+        .iter()
+        .filter(|m| m.is_data())
+        .map(|m| DataFile {
+            path: format!("scene/mesh-{}.obj", m.index),
+            entry: DataEntry::Mesh(m.clone()),
+        });
+    let terrains = spec
+        .terrains
+        .iter()
+        .filter(|t| t.is_data())
+        .map(|t| DataFile {
+            path: format!("scene/terrain-{}.tif", t.index),
+            entry: DataEntry::Terrain(t.clone()),
+        });
+    let clouds = spec
+        .clouds
+        .iter()
+        .filter(|c| c.is_data())
+        .map(|c| DataFile {
+            path: format!("scene/point_cloud-{}.xyz", c.index),
+            entry: DataEntry::Cloud(c.clone()),
+        });
+    meshes.chain(terrains).chain(clouds).collect()
+}
+
+impl DataFile {
+    /// Writes the entry's data to `dir.join(self.path)`.
+    pub fn write(&self, dir: &Path) -> io::Result<()> {
+        use crate::survey::spec::{CloudSource, MeshSource, TerrainSource};
+        let path = dir.join(&self.path);
+        if let Some(parent) = path.parent() {
+            std::fs::create_dir_all(parent)?;
+        }
+        match &self.entry {
+            DataEntry::Mesh(m) => {
+                let MeshSource::Data(data) = &m.source else {
+                    return Ok(());
+                };
+                let place = m.placement.placer();
+                let placed: Vec<_> = data.vertices.iter().map(|&v| place(v)).collect();
+                crate::io::export::write_obj(&path, &placed, &data.faces)
+            }
+            DataEntry::Terrain(t) => match &t.source {
+                TerrainSource::Grid(grid) => crate::io::export::write_geotiff(&path, grid),
+                _ => Ok(()),
+            },
+            DataEntry::Cloud(c) => match &c.source {
+                CloudSource::Data(points) => {
+                    crate::io::export::write_xyz(&path, &points.positions, &points.classes)
+                }
+                CloudSource::File(_) => Ok(()),
+            },
+        }
+    }
+
+    /// The survey table entry that names the written file.
+    fn raw_entry(&self, raw: &mut crate::survey::RawSurvey) {
+        use crate::survey::raw::{RawMesh, RawPointCloud, RawTerrain};
+        let file = Some(self.path.clone());
+        match &self.entry {
+            DataEntry::Mesh(m) => raw.meshes.push(RawMesh {
+                file,
+                class: Some(m.placement.default_class.name().to_string()),
+                material: m
+                    .placement
+                    .default_material
+                    .as_ref()
+                    .map(|m| m.name.clone()),
+                ..RawMesh::default()
+            }),
+            DataEntry::Terrain(t) => raw.terrains.push(RawTerrain {
+                file,
+                class: Some(t.class.name().to_string()),
+                material: Some(t.material.name.clone()),
+                ..RawTerrain::default()
+            }),
+            DataEntry::Cloud(c) => raw.point_clouds.push(RawPointCloud {
+                file,
+                voxel_m: Some(c.voxel_m),
+                class: c.class.map(|k| k.name().to_string()),
+                material: Some(c.material.name.clone()),
+                ..RawPointCloud::default()
+            }),
+        }
+    }
+}
+
+/// [`replayable`] with the entries given as data naming the files
+/// [`data_files`] gives (relative to the directory the survey is written
+/// to), so that the survey written beside them runs the same scene.
+pub fn replayable_with_data(survey: &Survey) -> crate::survey::RawSurvey {
+    let mut raw = replayable(survey);
+    for f in data_files(survey) {
+        f.raw_entry(&mut raw);
+    }
+    raw
+}
+
 /// LAS header settings: offset at the scene centre (plus `[output]
 /// offset_m`) rounded to 100 m (so that coordinates stay small integers),
 /// the survey's scale, the creation date from `SOURCE_DATE_EPOCH` if set

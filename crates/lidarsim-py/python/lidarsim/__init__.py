@@ -12,6 +12,8 @@ NumPy structured array with the fields of the LAS file::
     survey.run_to("out")               # the files of `lidarsim run`
     for block in survey.stream():      # a flight of any length, in blocks
         ...
+    survey = survey.with_mesh(vertices, faces, material="roof", class_="roof")
+    survey = survey.with_trees({"x": xs, "y": ys, "species": sp, ...})
     w = survey.waveform(line=0, pulse=1000)   # one pulse's full waveform
 
 A survey with problems raises :class:`SurveyError`, whose message names
@@ -124,16 +126,100 @@ def _merge(base: Dict[str, Any], changes: Mapping[str, Any]) -> Dict[str, Any]:
     return out
 
 
+def _rows(key: str, values: Any, dtype: Any) -> np.ndarray:
+    """``values`` as a contiguous (n, 3) array of ``dtype``, or a
+    :class:`SurveyError` naming ``key``."""
+    try:
+        a = np.ascontiguousarray(values, dtype=dtype)
+    except (TypeError, ValueError) as e:
+        raise SurveyError(f"key `{key}`: not an array of numbers: {e}") from None
+    if a.size == 0:
+        a = a.reshape(0, 3)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise SurveyError(f"key `{key}`: an array of shape (n, 3) is needed, got {a.shape}")
+    return a
+
+
+def _columns(table: Any) -> Dict[str, np.ndarray]:
+    """The columns of a table: a dict of arrays, a pandas or GeoPandas
+    DataFrame (a point ``geometry`` gives ``x`` and ``y``) or a structured
+    NumPy array."""
+    names = getattr(getattr(table, "dtype", None), "names", None)
+    if names:
+        return {n: np.asarray(table[n]) for n in names}
+    if hasattr(table, "columns"):
+        cols = {str(c): np.asarray(table[c]) for c in table.columns if str(c) != "geometry"}
+        if "geometry" in table.columns and "x" not in cols:
+            geometry = table["geometry"]
+            cols["x"], cols["y"] = np.asarray(geometry.x), np.asarray(geometry.y)
+        return cols
+    return {str(k): np.asarray(v) for k, v in dict(table).items()}
+
+
+#: The ``[[tree]]`` keys a tree table may have besides ``x``, ``y``, ``z``.
+TREE_COLUMNS = (
+    "species",
+    "dbh_m",
+    "height_m",
+    "crown_base_m",
+    "foliage_reflectance",
+    "bark_reflectance",
+    "crown_radius_m",
+    "extinction_per_m",
+    "uniform_density",
+    "seed",
+)
+
+
+def _tree_entries(table: Any) -> list:
+    """``[[tree]]`` dicts, one per row of ``table``."""
+    cols = _columns(table)
+    for needed in ("x", "y", "species", "dbh_m", "height_m", "crown_base_m"):
+        if needed not in cols:
+            raise SurveyError(f"key `tree.{needed}`: the tree table has no column `{needed}`")
+    unknown = sorted(set(cols) - {"x", "y", "z", *TREE_COLUMNS})
+    if unknown:
+        raise SurveyError(
+            f"key `tree.{unknown[0]}`: unknown column `{unknown[0]}`; a tree table has x, y, "
+            f"z and {', '.join(TREE_COLUMNS)}"
+        )
+    n = len(cols["x"])
+    for name, values in cols.items():
+        if len(values) != n:
+            raise SurveyError(f"key `tree.{name}`: {len(values)} values for {n} trees")
+    z = cols.get("z", np.zeros(n))
+    entries = []
+    for i in range(n):
+        entry = {"position_m": [float(cols["x"][i]), float(cols["y"][i]), float(z[i])]}
+        for key in TREE_COLUMNS:
+            if key not in cols:
+                continue
+            value = cols[key][i]
+            if key == "species":
+                entry[key] = str(value)
+            elif key == "seed":
+                entry[key] = int(value)
+            elif not (isinstance(value, float) and np.isnan(value)):
+                entry[key] = float(value)
+        entries.append(entry)
+    return entries
+
+
 class Survey:
     """A checked survey: scanner, platform, flight lines, scene and outputs.
 
     Make one with :meth:`load`, :meth:`from_toml`, :meth:`from_dict` or
     :meth:`demo`; change settings with :meth:`replace` (a new, re-checked
-    survey). The scene is built and indexed once, on the first run.
+    survey); add scene parts from arrays with :meth:`with_mesh`,
+    :meth:`with_terrain`, :meth:`with_trees` and :meth:`with_point_cloud`.
+    The scene is built and indexed once, on the first run.
     """
 
-    def __init__(self, core: "_lidarsim.SurveyCore") -> None:
+    def __init__(self, core: "_lidarsim.SurveyCore", data: tuple = ()) -> None:
         self._core = core
+        # The scene parts given as arrays, as (method, arguments) to apply
+        # again to a survey rebuilt from the dict (replace, seed).
+        self._data = data
 
     @classmethod
     def load(cls, path: PathLike, seed: Optional[int] = None) -> "Survey":
@@ -175,7 +261,11 @@ class Survey:
 
     def to_dict(self) -> Dict[str, Any]:
         """The survey's keys as a dict (seed fixed, file paths absolute):
-        ``Survey.from_dict(s.to_dict())`` is the same survey."""
+        ``Survey.from_dict(s.to_dict())`` is the same survey, but for the
+        scene parts given as arrays (meshes, terrains and point clouds of
+        the ``with_`` methods), which have no keys: :meth:`replace` keeps
+        them, and :meth:`run_to` writes them as files that its
+        ``survey.toml`` names."""
         return self._core.to_dict()
 
     def to_toml(self) -> str:
@@ -190,7 +280,100 @@ class Survey:
 
         Tables merge key by key; other values (arrays of tables such as
         ``flight_line`` included) are replaced; None removes a key."""
-        return Survey.from_dict(_merge(self.to_dict(), changes), seed=seed)
+        return Survey.from_dict(_merge(self.to_dict(), changes), seed=seed)._with_data(self._data)
+
+    def _with_data(self, data: tuple) -> "Survey":
+        """This survey with the scene parts ``data`` added."""
+        core = self._core
+        for method, args in data:
+            core = getattr(core, method)(*args)
+        return Survey(core, self._data + data)
+
+    def with_mesh(
+        self,
+        vertices: Any,
+        faces: Any,
+        material: str,
+        class_: str = "unclassified",
+        offset_m: Any = (0.0, 0.0, 0.0),
+        scale: float = 1.0,
+        rotation_z_deg: float = 0.0,
+    ) -> "Survey":
+        """A new survey with a triangle mesh added as the next ``[[mesh]]``:
+        ``vertices`` an (n, 3) array of x, y, z in metres, ``faces`` an
+        (m, 3) array of vertex indices from 0, ``material`` a name in
+        ``[materials]``, ``class_`` a class name of the survey file
+        (``"roof"``, ``"ground"``, …). Placed as a ``[[mesh]]`` file is:
+        scaled, turned by ``rotation_z_deg`` about the vertical, moved by
+        ``offset_m``. The same triangles from an OBJ file give the same
+        points."""
+        args = (
+            _rows("mesh.vertices", vertices, np.float64),
+            _rows("mesh.faces", faces, np.int64),
+            str(material),
+            str(class_),
+            [float(v) for v in offset_m],
+            float(scale),
+            float(rotation_z_deg),
+        )
+        return self._with_data((("with_mesh", args),))
+
+    def with_terrain(
+        self,
+        heights: Any,
+        transform: Any,
+        material: str,
+        class_: str = "ground",
+        nodata: Optional[float] = None,
+    ) -> "Survey":
+        """A new survey with a height grid added as the next
+        ``[[terrain]]``: ``heights`` a 2-D array of a north-up raster in its
+        own row order, ``transform`` its affine transform as rasterio gives
+        it (``(a, b, c, d, e, f)``: ``x = a·col + c``, ``y = e·row + f`` at a
+        pixel's corner; an ``affine.Affine`` works), the nodes at the pixel
+        centres as for a GeoTIFF; NaN or ``nodata`` for missing nodes. The
+        same raster in a GeoTIFF gives the same points."""
+        t = tuple(float(v) for v in tuple(transform)[:6])
+        h = np.ascontiguousarray(heights, dtype=np.float64)
+        if h.ndim != 2:
+            raise SurveyError(f"key `terrain.heights`: a 2-D array is needed, got {h.ndim} dimensions")
+        args = (h, list(t), str(material), str(class_), None if nodata is None else float(nodata))
+        return self._with_data((("with_terrain", args),))
+
+    def with_point_cloud(
+        self,
+        points: Any,
+        voxel_m: float,
+        material: str,
+        class_: Optional[str] = None,
+        classes: Any = None,
+    ) -> "Survey":
+        """A new survey with points added as the next ``[[point_cloud]]``,
+        as voxels of ``voxel_m``: ``points`` an (n, 3) array of x, y, z;
+        each voxel of class ``class_`` or, without it, of the class most of
+        its points have (``classes``: an ASPRS code per point, as a LAS
+        file's classification). The same points in a LAS file give the
+        same points."""
+        args = (
+            _rows("point_cloud.points", points, np.float64),
+            float(voxel_m),
+            str(material),
+            None if class_ is None else str(class_),
+            None if classes is None else np.ascontiguousarray(classes, dtype=np.uint8).ravel(),
+        )
+        return self._with_data((("with_point_cloud", args),))
+
+    def with_trees(self, table: Any) -> "Survey":
+        """A new survey with a tree for each row of ``table`` added as
+        ``[[tree]]`` entries: a dict of arrays, a pandas or GeoPandas
+        DataFrame or a structured array with columns ``x``, ``y``
+        (``geometry`` points will do), ``z`` (the stem base's height, 0 if
+        absent), ``species``, ``dbh_m``, ``height_m``, ``crown_base_m`` and
+        optionally the other ``[[tree]]`` keys (a NaN leaves a key at its
+        default). The same trees written as ``[[tree]]`` tables give the
+        same points."""
+        trees = list(self.to_dict().get("tree", [])) + _tree_entries(table)
+        return self.replace({"tree": trees})
 
     def warnings(self) -> list:
         """Settings that are allowed but probably not meant, each naming its

@@ -48,3 +48,29 @@ class SurveyCore:
     ) -> Dict[str, Any]: ...
     def stream(self, threads: int, min_points: int) -> PointStream: ...
     def waveform(self, line: int, pulse: int) -> Dict[str, Any]: ...
+    def with_mesh(
+        self,
+        vertices: "np.ndarray",
+        faces: "np.ndarray",
+        material: str,
+        class_name: str,
+        offset_m: List[float],
+        scale: float,
+        rotation_z_deg: float,
+    ) -> "SurveyCore": ...
+    def with_terrain(
+        self,
+        heights: "np.ndarray",
+        transform: List[float],
+        material: str,
+        class_name: str,
+        nodata: Optional[float],
+    ) -> "SurveyCore": ...
+    def with_point_cloud(
+        self,
+        points: "np.ndarray",
+        voxel_m: float,
+        material: str,
+        class_name: Optional[str],
+        classes: Optional["np.ndarray"],
+    ) -> "SurveyCore": ...

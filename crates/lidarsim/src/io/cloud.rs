@@ -1,5 +1,6 @@
-//! LAS/LAZ point clouds read into scene voxels (see [`crate::scene::cloud`]
-//! for what a voxel is), and the LAS reader's errors in words.
+//! Point clouds — LAS/LAZ and XYZ text files, or points given as data —
+//! made into scene voxels (see [`crate::scene::cloud`] for what a voxel
+//! is), and the LAS reader's errors in words.
 
 use std::path::{Path, PathBuf};
 
@@ -93,13 +94,164 @@ pub fn open_las(path: &Path) -> Result<las::Reader, String> {
     }
 }
 
-/// Loads a LAS or LAZ file into `scene` as voxels of one new object;
-/// returns (points read, voxels added).
+/// Loads a LAS, LAZ or XYZ text file (`.xyz`, `.txt`: `x y z [class]` a
+/// line) into `scene` as voxels of one new object; returns (points read,
+/// voxels added).
 pub fn load_point_cloud(
     path: &Path,
     placement: &CloudPlacement,
     scene: &mut Scene,
 ) -> Result<(u64, usize), CloudError> {
+    let mut cells = Voxels::new(path, placement);
+    let text = matches!(
+        path.extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref(),
+        Some("xyz" | "txt")
+    );
+    if text {
+        read_xyz(path, &mut cells)?;
+    } else {
+        read_las(path, &mut cells)?;
+    }
+    cells.add_to(scene, format!("point_cloud:{}", path.display()))
+}
+
+/// Adds points given as data (`classes`: an ASPRS code per point, or
+/// empty) to `scene` as voxels of one new object `name`; returns (points,
+/// voxels added). `name` stands for the file in messages.
+pub fn add_point_data(
+    positions: &[DVec3],
+    classes: &[u8],
+    placement: &CloudPlacement,
+    name: &str,
+    scene: &mut Scene,
+) -> Result<(u64, usize), CloudError> {
+    let path = Path::new(name);
+    let mut cells = Voxels::new(path, placement);
+    for (i, p) in positions.iter().enumerate() {
+        cells.add(*p, classes.get(i).copied().unwrap_or(1))?;
+    }
+    cells.add_to(scene, name.to_string())
+}
+
+/// The points of a cloud gathered by voxel: `(voxel index, class code)`
+/// of every point, sorted and grouped at the end (no hash map of
+/// counters).
+struct Voxels<'a> {
+    path: &'a Path,
+    placement: &'a CloudPlacement,
+    cells: Vec<([i64; 3], u8)>,
+    read: u64,
+    not_finite: u64,
+}
+
+impl<'a> Voxels<'a> {
+    fn new(path: &'a Path, placement: &'a CloudPlacement) -> Self {
+        Self {
+            path,
+            placement,
+            cells: Vec::new(),
+            read: 0,
+            not_finite: 0,
+        }
+    }
+
+    /// One point at `p` (before the offset) of class `code`.
+    fn add(&mut self, p: DVec3, code: u8) -> Result<(), CloudError> {
+        self.read += 1;
+        let v = self.placement.voxel_m;
+        let q = p + self.placement.offset_m;
+        if !q.is_finite() {
+            self.not_finite += 1;
+            return Ok(());
+        }
+        let cell = (q / v).floor();
+        // Beyond 2^52 cells the indices would no longer be exact.
+        if cell.abs().max_element() > 4.5e15 {
+            return Err(CloudError::Read {
+                path: self.path.to_path_buf(),
+                reason: format!(
+                    "the point at ({}, {}, {}) m is more than 2^52 voxels of {v} m from the \
+                     origin: use a larger voxel_m",
+                    q.x, q.y, q.z
+                ),
+            });
+        }
+        self.cells
+            .push(([cell.x as i64, cell.y as i64, cell.z as i64], code));
+        Ok(())
+    }
+
+    /// The voxels, each of the class most of its points have (the lowest
+    /// code of equals), as one new object `name`; (points, voxels).
+    fn add_to(mut self, scene: &mut Scene, name: String) -> Result<(u64, usize), CloudError> {
+        let path = self.path.to_path_buf();
+        if self.cells.is_empty() && self.not_finite > 0 {
+            return Err(CloudError::Read {
+                path,
+                reason: format!(
+                    "none of its {} points has finite coordinates (check the header's scale \
+                     and offset)",
+                    self.not_finite
+                ),
+            });
+        }
+        if self.cells.is_empty() {
+            return Err(CloudError::Empty { path });
+        }
+        let (cells, placement, v) = (&mut self.cells, self.placement, self.placement.voxel_m);
+        cells.sort_unstable();
+        let object = scene.add_object(name);
+        let mut added = 0usize;
+        let mut start = 0;
+        while start < cells.len() {
+            let key = cells[start].0;
+            let mut end = start;
+            // Within a voxel the entries are sorted by code: count runs.
+            let (mut best, mut best_n) = (cells[start].1, 0usize);
+            while end < cells.len() && cells[end].0 == key {
+                let code = cells[end].1;
+                let run_start = end;
+                while end < cells.len() && cells[end].0 == key && cells[end].1 == code {
+                    end += 1;
+                }
+                if end - run_start > best_n {
+                    (best, best_n) = (code, end - run_start);
+                }
+            }
+            start = end;
+            added += 1;
+            if added > MAX_VOXELS {
+                return Err(CloudError::TooMany {
+                    path,
+                    voxels: added,
+                    voxel_m: v,
+                    limit: MAX_VOXELS,
+                });
+            }
+            let min = DVec3::new(key[0] as f64, key[1] as f64, key[2] as f64) * v;
+            scene.primitives.push(Primitive {
+                shape: Shape::Voxel(Voxel {
+                    bounds: Aabb {
+                        min,
+                        max: min + DVec3::splat(v),
+                    },
+                }),
+                material: placement.material,
+                class: placement
+                    .class
+                    .unwrap_or_else(|| SurfaceClass::from_asprs(best)),
+                object,
+            });
+        }
+        Ok((self.read, added))
+    }
+}
+
+/// The points of a LAS or LAZ file into `cells`.
+fn read_las(path: &Path, cells: &mut Voxels<'_>) -> Result<(), CloudError> {
     let bad = |e: las::Error| CloudError::Read {
         path: path.to_path_buf(),
         reason: describe_las_error(&e),
@@ -108,98 +260,62 @@ pub fn load_point_cloud(
         path: path.to_path_buf(),
         reason,
     })?;
-    let mut not_finite = 0u64;
-    let v = placement.voxel_m;
-    // (voxel index, classification) of every point, then sorted and
-    // grouped: no hash map of counters.
-    let mut cells: Vec<([i64; 3], u8)> = Vec::new();
-    let mut read = 0u64;
     loop {
         let batch = reader.read_points(1 << 20).map_err(bad)?;
         if batch.is_empty() {
-            break;
+            return Ok(());
         }
         for p in batch.points() {
             let p = p.map_err(bad)?;
-            read += 1;
-            let q = DVec3::new(p.x, p.y, p.z) + placement.offset_m;
-            if !q.is_finite() {
-                not_finite += 1;
-                continue;
-            }
-            let cell = (q / v).floor();
-            // Beyond 2^52 cells the indices would no longer be exact.
-            if cell.abs().max_element() > 4.5e15 {
-                return Err(CloudError::Read {
-                    path: path.to_path_buf(),
-                    reason: format!(
-                        "the point at ({}, {}, {}) m is more than 2^52 voxels of {v} m from the \
-                         origin: use a larger voxel_m",
-                        q.x, q.y, q.z
-                    ),
-                });
-            }
-            let key = [cell.x as i64, cell.y as i64, cell.z as i64];
-            cells.push((key, u8::from(p.classification)));
+            cells.add(DVec3::new(p.x, p.y, p.z), u8::from(p.classification))?;
         }
     }
-    if cells.is_empty() && not_finite > 0 {
-        return Err(CloudError::Read {
+}
+
+/// The points of an XYZ text file into `cells`: per line `x y z` and
+/// optionally an ASPRS class code (1, unclassified, without), separated by
+/// blanks or commas; blank lines and lines starting with `#` are skipped.
+fn read_xyz(path: &Path, cells: &mut Voxels<'_>) -> Result<(), CloudError> {
+    let read_err = |reason: String| CloudError::Read {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let bytes = crate::io::input::read_input(path, crate::io::input::MAX_INPUT_BYTES)
+        .map_err(|e| read_err(e.to_string()))?;
+    let text = std::str::from_utf8(&bytes)
+        .map_err(|e| read_err(format!("not a text file (UTF-8): {e}")))?;
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let bad = |why: String| CloudError::Read {
             path: path.to_path_buf(),
-            reason: format!(
-                "none of its {not_finite} points has finite coordinates (check the header's \
-                 scale and offset)"
-            ),
-        });
-    }
-    if cells.is_empty() {
-        return Err(CloudError::Empty {
-            path: path.to_path_buf(),
-        });
-    }
-    cells.sort_unstable();
-    let object = scene.add_object(format!("point_cloud:{}", path.display()));
-    let mut added = 0usize;
-    let mut start = 0;
-    while start < cells.len() {
-        let key = cells[start].0;
-        let mut end = start;
-        // Within a voxel the entries are sorted by code: count runs.
-        let (mut best, mut best_n) = (cells[start].1, 0usize);
-        while end < cells.len() && cells[end].0 == key {
-            let code = cells[end].1;
-            let run_start = end;
-            while end < cells.len() && cells[end].0 == key && cells[end].1 == code {
-                end += 1;
-            }
-            if end - run_start > best_n {
-                (best, best_n) = (code, end - run_start);
-            }
+            reason: format!("line {}: {why}", n + 1),
+        };
+        let fields: Vec<&str> = line
+            .split(|c: char| c.is_whitespace() || c == ',')
+            .filter(|f| !f.is_empty())
+            .collect();
+        if !(3..=4).contains(&fields.len()) {
+            return Err(bad(format!(
+                "expected x y z and an optional class, got {} values",
+                fields.len()
+            )));
         }
-        start = end;
-        added += 1;
-        if added > MAX_VOXELS {
-            return Err(CloudError::TooMany {
-                path: path.to_path_buf(),
-                voxels: added,
-                voxel_m: v,
-                limit: MAX_VOXELS,
-            });
+        let mut xyz = [0.0f64; 3];
+        for (a, f) in xyz.iter_mut().zip(&fields) {
+            *a = f
+                .parse()
+                .map_err(|_| bad(format!("'{f}' is not a number")))?;
         }
-        let min = DVec3::new(key[0] as f64, key[1] as f64, key[2] as f64) * v;
-        scene.primitives.push(Primitive {
-            shape: Shape::Voxel(Voxel {
-                bounds: Aabb {
-                    min,
-                    max: min + DVec3::splat(v),
-                },
-            }),
-            material: placement.material,
-            class: placement
-                .class
-                .unwrap_or_else(|| SurfaceClass::from_asprs(best)),
-            object,
-        });
+        let code = match fields.get(3) {
+            None => 1,
+            Some(f) => f
+                .parse::<u8>()
+                .map_err(|_| bad(format!("class '{f}' is not a code from 0 to 255")))?,
+        };
+        cells.add(DVec3::from_array(xyz), code)?;
     }
-    Ok((read, added))
+    Ok(())
 }

@@ -381,9 +381,6 @@ pub fn read_geotiff(path: &Path) -> Result<HeightGrid, TerrainError> {
         return Err(err(format!("the pixel size ({bx}, {by}) is not usable")));
     }
     let c = if pixel_is_point { 0.0 } else { 0.5 };
-    // Pixel centre of column i / row j.
-    let x_of = |i: usize| ax + bx * (i as f64 + c);
-    let y_of = |j: usize| ay + by * (j as f64 + c);
     if width < 2 || height < 2 {
         return Err(TerrainError::Size {
             path: path.to_path_buf(),
@@ -457,7 +454,42 @@ pub fn read_geotiff(path: &Path) -> Result<HeightGrid, TerrainError> {
             "decoded {len} samples for {width} × {height} pixels"
         )));
     }
-    // Grid node (col, row) runs east and north: flip the file's order
+    let grid = raster_grid(width, height, (ax, bx, ay, by), c, nodata, value).map_err(
+        |(row, col, v)| {
+            err(format!(
+                "the pixel at row {}, column {} of the file holds {v:e}, not a height within \
+                 ±{MAX_HEIGHT_M} m; mark missing pixels with the GDAL_NODATA tag or NaN",
+                row + 1,
+                col + 1
+            ))
+        },
+    )?;
+    drop(image);
+    grid.check_size(path)?;
+    Ok(grid)
+}
+
+/// The nodes of a north-up raster of `width` × `height` samples as a
+/// height grid: `value(k)` is the raster's `k`-th sample (rows of `width`
+/// in the raster's order), raster `(I, J)` lies at model
+/// `X = ax + bx·I`, `Y = ay + by·J`, and the nodes at `(I + c, J + c)`
+/// (`c` = 0.5 for pixel centres, 0 when the pixels are points); NaN and
+/// `nodata` samples are nodata. The grid's nodes run east and north
+/// whatever the raster's order. `Err((row, column, value))` (of the
+/// raster, from 0) names a sample that is not a height within
+/// ±[`MAX_HEIGHT_M`].
+pub fn raster_grid(
+    width: usize,
+    height: usize,
+    (ax, bx, ay, by): (f64, f64, f64, f64),
+    c: f64,
+    nodata: Option<f64>,
+    value: impl Fn(usize) -> f64 + Sync,
+) -> Result<HeightGrid, (usize, usize, f64)> {
+    // Pixel centre of column i / row j.
+    let x_of = |i: usize| ax + bx * (i as f64 + c);
+    let y_of = |j: usize| ay + by * (j as f64 + c);
+    // Grid node (col, row) runs east and north: flip the raster's order
     // where its axes run west or south.
     let src_col = |col: usize| if bx > 0.0 { col } else { width - 1 - col };
     let src_row = |row: usize| if by > 0.0 { row } else { height - 1 - row };
@@ -479,27 +511,21 @@ pub fn read_geotiff(path: &Path) -> Result<HeightGrid, TerrainError> {
                 }
             }
         });
-    if let Some(i) = heights.iter().position(|h| h.is_infinite()) {
-        let (row, col) = (i / width, i % width);
-        let v = value(src_row(row) * width + src_col(col));
-        return Err(err(format!(
-            "the pixel at row {}, column {} of the file holds {v:e}, not a height within \
-             ±{MAX_HEIGHT_M} m; mark missing pixels with the GDAL_NODATA tag or NaN",
-            src_row(row) + 1,
-            src_col(col) + 1
-        )));
+    if heights.iter().any(|h| h.is_infinite()) {
+        // The first in the raster's own order.
+        let bad = |v: f64| !v.is_nan() && Some(v) != nodata && v.abs() > MAX_HEIGHT_M;
+        if let Some(k) = (0..width * height).find(|&k| bad(value(k))) {
+            return Err((k / width, k % width, value(k)));
+        }
     }
-    drop(image);
-    let grid = HeightGrid {
+    Ok(HeightGrid {
         cols: width,
         rows: height,
         origin_m: [x_of(src_col(0)), y_of(src_row(0))],
         spacing_m: [bx.abs(), by.abs()],
         z_offset_m: 0.0,
         heights,
-    };
-    grid.check_size(path)?;
-    Ok(grid)
+    })
 }
 
 #[cfg(test)]

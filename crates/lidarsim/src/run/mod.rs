@@ -19,7 +19,8 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
 
 use crate::files::{
-    digitizer, input_files, las_settings, point_files, replayable, write_trajectory,
+    data_files, digitizer, input_files, las_settings, point_files, replayable_with_data,
+    write_trajectory,
 };
 use crate::output::{
     FileError, LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter, write_atomic,
@@ -296,9 +297,18 @@ pub fn run_world_to_dir(
     // The survey as run, with the seed fixed and file paths made absolute,
     // so `lidarsim run DIR/survey.toml` repeats it and `lidarsim waveform`
     // can simulate any pulse again (a resumed run has it already).
+    // Scene entries given as data are written beside it, as files it
+    // names.
     let survey_path = out_dir.join("survey.toml");
+    for data in data_files(survey) {
+        if prev.is_none() {
+            let path = out_dir.join(&data.path);
+            data.write(out_dir).map_err(io_err(&path))?;
+        }
+        files.push(data.path);
+    }
     if prev.is_none() {
-        let text = toml::to_string(&replayable(survey))
+        let text = toml::to_string(&replayable_with_data(survey))
             .map_err(|e| io_err(&survey_path)(io::Error::other(e)))?;
         write_atomic(&survey_path, text.as_bytes()).map_err(io_err(&survey_path))?;
     }

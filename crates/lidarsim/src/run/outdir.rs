@@ -33,11 +33,51 @@ pub const RUN_FILES: [&str; 12] = [
     super::REPORT_STATE,
 ];
 
+/// The directory in which a run writes the scene entries a program gave
+/// as data ([`crate::files::data_files`]).
+pub const DATA_DIR: &str = "scene";
+
 /// Whether `name` is a file a run writes: one of [`RUN_FILES`], the same
 /// with `.partial` (a file being written), or the [`MARKER`].
 pub fn is_run_file(name: &str) -> bool {
     let base = name.strip_suffix(".partial").unwrap_or(name);
     name == MARKER || RUN_FILES.contains(&base)
+}
+
+/// Whether `name` is a file a run writes into [`DATA_DIR`]:
+/// `mesh-I.obj`, `terrain-I.tif` or `point_cloud-I.xyz`.
+pub fn is_data_file(name: &str) -> bool {
+    [
+        ("mesh-", ".obj"),
+        ("terrain-", ".tif"),
+        ("point_cloud-", ".xyz"),
+    ]
+    .iter()
+    .any(|(prefix, suffix)| {
+        name.strip_prefix(prefix)
+            .and_then(|rest| rest.strip_suffix(suffix))
+            .is_some_and(|i| !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()))
+    })
+}
+
+/// The files of `dir/DATA_DIR` if it is a directory holding only files a
+/// run writes there (`None` otherwise).
+fn data_dir_files(dir: &Path) -> Option<Vec<PathBuf>> {
+    let data = dir.join(DATA_DIR);
+    let meta = std::fs::symlink_metadata(&data).ok()?;
+    if !meta.is_dir() {
+        return None;
+    }
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(&data).ok()? {
+        let entry = entry.ok()?;
+        let is_file = entry.file_type().ok()?.is_file();
+        if !(is_file && is_data_file(&entry.file_name().to_string_lossy())) {
+            return None;
+        }
+        files.push(entry.path());
+    }
+    Some(files)
 }
 
 fn error(path: &Path, kind: io::ErrorKind, message: String) -> RunError {
@@ -97,12 +137,13 @@ pub fn prepare_fresh(dir: &Path, overwrite: bool) -> Result<(), RunError> {
     };
     let mut ours = Vec::new();
     let mut others = Vec::new();
+    let data = data_dir_files(dir);
     for entry in std::fs::read_dir(dir).map_err(listed)? {
         let entry = entry.map_err(listed)?;
         let name = entry.file_name().to_string_lossy().into_owned();
         if is_run_file(&name) {
             ours.push(entry.path());
-        } else {
+        } else if !(name == DATA_DIR && data.is_some()) {
             others.push(name);
         }
     }
@@ -145,6 +186,17 @@ pub fn prepare_fresh(dir: &Path, overwrite: bool) -> Result<(), RunError> {
             source: e,
         })?;
     }
+    // The scene data an earlier run wrote, and its directory.
+    if let Some(files) = data {
+        for path in files {
+            std::fs::remove_file(&path).map_err(|e| RunError {
+                path: path.clone(),
+                source: e,
+            })?;
+        }
+        let path = dir.join(DATA_DIR);
+        std::fs::remove_dir(&path).map_err(|e| RunError { path, source: e })?;
+    }
     crate::output::write_atomic(
         &dir.join(MARKER),
         b"lidarsim writes its runs into this directory; a new run replaces only its own files.\n",
@@ -173,6 +225,31 @@ mod tests {
         assert!(is_run_file(MARKER));
         assert!(!is_run_file("points.las.bak"));
         assert!(!is_run_file("notes.txt"));
+    }
+
+    /// The scene files a run wrote are cleared with their directory; a
+    /// `scene` directory holding anything else is someone else's.
+    #[test]
+    fn a_runs_scene_directory_is_cleared_and_a_foreign_one_kept() {
+        assert!(is_data_file("mesh-0.obj") && is_data_file("point_cloud-12.xyz"));
+        assert!(is_data_file("terrain-3.tif"));
+        assert!(!is_data_file("mesh-.obj") && !is_data_file("mesh-0.tif"));
+        assert!(!is_data_file("mesh-a.obj") && !is_data_file("notes.txt"));
+        let d = temp("scene");
+        std::fs::create_dir_all(d.join(DATA_DIR)).unwrap();
+        std::fs::write(d.join(DATA_DIR).join("mesh-0.obj"), "v").unwrap();
+        std::fs::write(d.join("points.las"), "old").unwrap();
+        prepare_fresh(&d, false).unwrap();
+        assert!(!d.join(DATA_DIR).exists() && !d.join("points.las").exists());
+        std::fs::create_dir_all(d.join(DATA_DIR)).unwrap();
+        std::fs::write(d.join(DATA_DIR).join("mesh-0.obj"), "v").unwrap();
+        std::fs::write(d.join(DATA_DIR).join("mine.obj"), "v").unwrap();
+        std::fs::remove_file(d.join(MARKER)).unwrap();
+        let e = prepare_fresh(&d, false).unwrap_err();
+        assert!(e.to_string().contains(DATA_DIR), "{e}");
+        prepare_fresh(&d, true).unwrap();
+        assert!(d.join(DATA_DIR).join("mine.obj").exists());
+        std::fs::remove_dir_all(&d).ok();
     }
 
     #[test]

@@ -43,6 +43,48 @@ pub struct MeshPlacement {
     pub class_map: Vec<(String, SurfaceClass)>,
 }
 
+impl MeshPlacement {
+    /// Where a vertex of the mesh's own frame goes: scaled, turned about
+    /// the vertical, then moved (the rotation worked out once).
+    pub fn placer(&self) -> impl Fn(DVec3) -> DVec3 + '_ {
+        let rotation = crate::geometry::DMat3::from_rotation_z(self.rotation_z_rad);
+        move |p| rotation * (p * self.scale) + self.offset_m
+    }
+
+    /// Adds the triangles `faces` (indices into `vertices`, in the mesh's
+    /// own frame) as one new object `name` of the placement's default
+    /// material (`material`) and class; returns the triangles added and
+    /// the degenerate ones skipped.
+    pub fn add_triangles(
+        &self,
+        scene: &mut Scene,
+        vertices: &[DVec3],
+        faces: &[[u32; 3]],
+        material: MaterialId,
+        name: impl Into<String>,
+    ) -> (usize, usize) {
+        let object = scene.add_object(name);
+        let place = self.placer();
+        let corner = |k: u32| vertices.get(k as usize).map_or(DVec3::NAN, |&v| place(v));
+        let (mut added, mut skipped) = (0, 0);
+        for f in faces {
+            match Triangle::new(corner(f[0]), corner(f[1]), corner(f[2])) {
+                Some(t) => {
+                    scene.primitives.push(Primitive {
+                        shape: Shape::Triangle(t),
+                        material,
+                        class: self.default_class,
+                        object,
+                    });
+                    added += 1;
+                }
+                None => skipped += 1,
+            }
+        }
+        (added, skipped)
+    }
+}
+
 /// Ground-truth class of a surface. It becomes the LAS classification of
 /// the points that surface returns (ASPRS standard classes, LAS 1.4 R15
 /// Table 17).

@@ -9,6 +9,7 @@
 //! together.
 
 mod check;
+pub mod data;
 mod diagnostic;
 mod locate;
 pub mod platform_preset;

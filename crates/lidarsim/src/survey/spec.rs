@@ -3,10 +3,11 @@
 //! builds them, reading the files they name.
 
 use std::path::PathBuf;
+use std::sync::Arc;
 
 use crate::geometry::DVec3;
 use crate::scene::forest::ForestSpec;
-use crate::scene::terrain::FbmSpec;
+use crate::scene::terrain::{FbmSpec, HeightGrid};
 use crate::scene::{Material, MeshPlacement, Polygon, SurfaceClass, TreeSpec};
 use crate::sensor::platform::Interpolation;
 
@@ -49,12 +50,32 @@ pub struct PolygonEntry {
 pub struct MeshEntry {
     /// Index in `[[mesh]]`.
     pub index: usize,
-    /// The file (relative paths resolved against the survey's directory).
-    pub file: PathBuf,
-    /// A glTF file (`.gltf`, `.glb`) rather than OBJ.
-    pub gltf: bool,
+    /// Where its triangles come from.
+    pub source: MeshSource,
     /// Where it goes and what it defaults to.
     pub placement: MeshPlacement,
+}
+
+/// Where a mesh's triangles come from.
+#[derive(Clone, Debug)]
+pub enum MeshSource {
+    /// An OBJ file (relative paths resolved against the survey's
+    /// directory).
+    Obj(PathBuf),
+    /// A glTF file (`.gltf`, `.glb`).
+    Gltf(PathBuf),
+    /// Vertices and faces given by a program ([`crate::survey::data`]).
+    Data(Arc<MeshData>),
+}
+
+/// A triangle mesh as data: vertices, m, and faces as triples of vertex
+/// indices (counter-clockwise or not: surfaces are two-sided).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshData {
+    /// Vertex positions, before the placement, m.
+    pub vertices: Vec<DVec3>,
+    /// Triangles as indices into `vertices`.
+    pub faces: Vec<[u32; 3]>,
 }
 
 /// Where a terrain's heights come from.
@@ -64,6 +85,8 @@ pub enum TerrainSource {
     File(PathBuf, String),
     /// Generated fractional Brownian motion.
     Fbm(FbmSpec),
+    /// A height grid given by a program ([`crate::survey::data`]).
+    Grid(Arc<HeightGrid>),
 }
 
 /// A checked `[[terrain]]`.
@@ -86,8 +109,8 @@ pub struct TerrainEntry {
 pub struct CloudEntry {
     /// Index in `[[point_cloud]]`.
     pub index: usize,
-    /// The LAS or LAZ file.
-    pub file: PathBuf,
+    /// Where its points come from.
+    pub source: CloudSource,
     /// Voxel edge, m.
     pub voxel_m: f64,
     /// Added to every point, m.
@@ -96,6 +119,25 @@ pub struct CloudEntry {
     pub material: Material,
     /// Class of all voxels; `None` takes it from the points.
     pub class: Option<SurfaceClass>,
+}
+
+/// Where a point cloud's points come from.
+#[derive(Clone, Debug)]
+pub enum CloudSource {
+    /// A LAS, LAZ or XYZ text file.
+    File(PathBuf),
+    /// Points given by a program ([`crate::survey::data`]).
+    Data(Arc<PointData>),
+}
+
+/// Points as data: positions, m, and each one's ASPRS class code (or
+/// none: unclassified).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PointData {
+    /// Positions, before the entry's offset, m.
+    pub positions: Vec<DVec3>,
+    /// ASPRS classification of each point; empty for none.
+    pub classes: Vec<u8>,
 }
 
 /// Where the flight lines come from: exactly one of the three.

@@ -8,8 +8,9 @@ use crate::geometry::DVec3;
 use crate::geometry::MAX_COORDINATE_M;
 use crate::message::num;
 use crate::scene::forest::{generate, polygon_area};
+use crate::scene::terrain::HeightGrid;
 use crate::scene::{Primitive, Scene, Shape};
-use crate::survey::spec::TerrainSource;
+use crate::survey::spec::{CloudSource, MeshSource, TerrainSource};
 use crate::survey::{KeyPath, Survey};
 
 /// What [`build`] makes.
@@ -53,10 +54,31 @@ pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> B
     for m in &spec.meshes {
         let key = root.key("mesh").index(m.index);
         owners.push((key.key("offset_m"), scene.primitives.len()));
-        let loaded = if m.gltf {
-            crate::io::gltf::load_gltf(&m.file, &m.placement, &survey.materials, &mut scene)
-        } else {
-            crate::io::obj::load_obj(&m.file, &m.placement, &survey.materials, &mut scene)
+        let loaded = match &m.source {
+            MeshSource::Gltf(file) => {
+                crate::io::gltf::load_gltf(file, &m.placement, &survey.materials, &mut scene)
+            }
+            MeshSource::Obj(file) => {
+                crate::io::obj::load_obj(file, &m.placement, &survey.materials, &mut scene)
+            }
+            MeshSource::Data(data) => match &m.placement.default_material {
+                // Faces within the vertices were checked when it was added.
+                Some(material) => {
+                    let material = scene.add_material(material.clone());
+                    let name = format!("mesh[{}]:data", m.index);
+                    Ok(m.placement.add_triangles(
+                        &mut scene,
+                        &data.vertices,
+                        &data.faces,
+                        material,
+                        name,
+                    ))
+                }
+                None => {
+                    problems.push((key.key("material"), "is required".to_string()));
+                    continue;
+                }
+            },
         };
         if let Err(e) = loaded {
             let at = match &e {
@@ -80,6 +102,10 @@ pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> B
                 crate::scene::terrain::generate_fbm(fbm).map_err(|e| (key.key("resolution_m"), e)),
                 format!("terrain[{}]:fbm", t.index),
             ),
+            TerrainSource::Grid(grid) => (
+                Ok(HeightGrid::clone(grid)),
+                format!("terrain[{}]:data", t.index),
+            ),
         };
         match grid {
             Ok(mut grid) => {
@@ -99,7 +125,19 @@ pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> B
             material: scene.add_material(cl.material.clone()),
             class: cl.class,
         };
-        if let Err(e) = crate::io::cloud::load_point_cloud(&cl.file, &placement, &mut scene) {
+        let loaded = match &cl.source {
+            CloudSource::File(file) => {
+                crate::io::cloud::load_point_cloud(file, &placement, &mut scene)
+            }
+            CloudSource::Data(points) => crate::io::cloud::add_point_data(
+                &points.positions,
+                &points.classes,
+                &placement,
+                &format!("point_cloud[{}]:data", cl.index),
+                &mut scene,
+            ),
+        };
+        if let Err(e) = loaded {
             problems.push((key.key("file"), e.to_string()));
         }
     }

@@ -23,7 +23,7 @@ use std::io::BufReader;
 use std::path::Path;
 
 use super::mesh::{MeshError, class_from_name, glob_match, mapped_class};
-use crate::geometry::{DMat3, DVec3};
+use crate::geometry::DVec3;
 use crate::scene::{Material, MeshPlacement, Primitive, Scene, Shape, SurfaceClass, Triangle};
 use plain::{bad_vertex, first_bad_line, plain_obj};
 
@@ -229,10 +229,8 @@ pub fn load_obj(
     }
 
     let object = scene.add_object(format!("mesh:{}", path.display()));
-    let rotation = DMat3::from_rotation_z(placement.rotation_z_rad);
-    let place = |x: f64, y: f64, z: f64| {
-        rotation * (DVec3::new(x, y, z) * placement.scale) + placement.offset_m
-    };
+    let placer = placement.placer();
+    let place = |x: f64, y: f64, z: f64| placer(DVec3::new(x, y, z));
     let (mut added, mut skipped) = (0usize, 0usize);
     for group in &groups {
         let (material, class_hint) = match group.material_id {

@@ -9,7 +9,9 @@ use super::{Checker, Materials};
 use crate::geometry::DVec3;
 use crate::scene::terrain::FbmSpec;
 use crate::scene::{Material, MeshPlacement, Polygon, SurfaceClass};
-use crate::survey::spec::{CloudEntry, MeshEntry, PolygonEntry, TerrainEntry, TerrainSource};
+use crate::survey::spec::{
+    CloudEntry, CloudSource, MeshEntry, MeshSource, PolygonEntry, TerrainEntry, TerrainSource,
+};
 use crate::survey::{KeyPath, MAX_POLYGON_VERTICES, RawSurvey, raw};
 
 /// Checks `[materials]`.
@@ -220,8 +222,11 @@ pub(crate) fn meshes(
             .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"));
         out.push(MeshEntry {
             index: i,
-            file: full,
-            gltf,
+            source: if gltf {
+                MeshSource::Gltf(full)
+            } else {
+                MeshSource::Obj(full)
+            },
             placement: MeshPlacement {
                 scale,
                 rotation_z_rad: rotation.to_radians(),
@@ -418,7 +423,7 @@ pub(crate) fn clouds(
         };
         out.push(CloudEntry {
             index: i,
-            file: base.join(file),
+            source: CloudSource::File(base.join(file)),
             voxel_m,
             offset_m,
             material,
