@@ -42,6 +42,9 @@ CHILD = textwrap.dedent(
     try:
         if sys.argv[2] == "memory":
             survey.run(threads=2, progress=progress)
+        elif sys.argv[2] == "stream":
+            for block in survey.stream(block_points=100_000, threads=2, progress=progress):
+                pass
         else:
             survey.run_to(sys.argv[3], threads=2, progress=progress, no_space_check=True)
         print("finished", flush=True)
@@ -78,6 +81,10 @@ def interrupt(mode, out_dir=""):
 
 def test_ctrl_c_interrupts_a_run_in_memory():
     interrupt("memory")
+
+
+def test_ctrl_c_interrupts_a_stream():
+    interrupt("stream")
 
 
 def test_ctrl_c_interrupts_a_run_to_a_directory_and_keeps_partial_files(tmp_path):
