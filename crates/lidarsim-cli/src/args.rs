@@ -34,6 +34,9 @@ pub enum Command {
     Render(RenderArgs),
     /// Measure speed on the benchmark scenes (flat, 1 M-triangle terrain, forest stand).
     Bench(BenchArgs),
+    /// Join the parts of a split run (`lidarsim run SURVEY --part K/N`) into
+    /// the files one unsplit run writes, byte for byte.
+    Merge(MergeArgs),
 }
 
 /// The options of `lidarsim demo`.
@@ -94,6 +97,49 @@ pub struct RunArgs {
     /// the files an uninterrupted run would have written.
     #[arg(long, value_name = "DIR", conflicts_with = "survey")]
     pub resume: Option<PathBuf>,
+    /// Simulate only part K of N (K from 1): whole flight lines where
+    /// there are enough, otherwise equal shares of the pulses, into the
+    /// output directory as points.part and part.json for `lidarsim merge`.
+    #[arg(long, value_name = "K/N", conflicts_with = "resume", value_parser = part_parser)]
+    pub part: Option<(usize, usize)>,
+}
+
+/// Parses `K/N` with `1 ≤ K ≤ N`.
+fn part_parser(text: &str) -> Result<(usize, usize), String> {
+    let (k, n) = text
+        .split_once('/')
+        .ok_or_else(|| format!("'{text}' is not K/N (for example 2/7)"))?;
+    let number = |s: &str| {
+        s.trim()
+            .parse::<usize>()
+            .map_err(|_| format!("'{text}' is not K/N: '{s}' is not a whole number"))
+    };
+    let (k, n) = (number(k)?, number(n)?);
+    if n == 0 || k == 0 || k > n {
+        return Err(format!("'{text}': K must be from 1 to N, and N at least 1"));
+    }
+    Ok((k, n))
+}
+
+/// The options of `lidarsim merge`.
+#[derive(Args)]
+pub struct MergeArgs {
+    /// The parts' output directories, in any order.
+    #[arg(required = true, value_name = "PART_DIR")]
+    pub parts: Vec<PathBuf>,
+    /// Output directory of the merged run.
+    #[arg(short, long, default_value = "out")]
+    pub output: PathBuf,
+    /// Threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Write into a non-empty directory no run wrote, replacing only
+    /// the files a run writes there.
+    #[arg(long)]
+    pub overwrite: bool,
+    /// Merge even if the expected output exceeds the free disk space.
+    #[arg(long)]
+    pub no_space_check: bool,
 }
 
 /// The options of `lidarsim check`.

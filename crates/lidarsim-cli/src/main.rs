@@ -19,6 +19,7 @@ mod args;
 mod bench;
 mod check;
 mod cpu;
+mod parts;
 mod render;
 mod simulate;
 mod summary;
@@ -59,5 +60,6 @@ fn main() -> ExitCode {
         Command::Waveform(args) => waveform::command(args),
         Command::Render(args) => render::command(args),
         Command::Bench(args) => bench::command(args),
+        Command::Merge(args) => parts::merge(args),
     }
 }

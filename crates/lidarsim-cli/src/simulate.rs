@@ -72,6 +72,7 @@ pub fn run(args: RunArgs) -> ExitCode {
         overwrite,
         no_space_check,
         resume,
+        part,
     } = args;
     let (path, output, resuming) = match (resume, survey) {
         (Some(dir), _) => (dir.join("survey.toml"), dir, true),
@@ -92,6 +93,9 @@ pub fn run(args: RunArgs) -> ExitCode {
         Ok(loaded) => loaded,
         Err(e) => return fail_survey(&e),
     };
+    if let Some(part) = part {
+        return crate::parts::run_part(&survey, &world, &output, threads, part, overwrite);
+    }
     let how = How {
         resume: resuming,
         overwrite,
@@ -132,6 +136,29 @@ struct How {
     no_space_check: bool,
 }
 
+/// `threads`, or every core; a zero is refused.
+pub(crate) fn threads_or_all(threads: Option<usize>) -> Result<usize, ExitCode> {
+    match threads {
+        Some(0) => Err(fail(2, "--threads must be at least 1")),
+        Some(n) => Ok(n),
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
+}
+
+/// A progress bar of `total` pulses on a terminal, hidden otherwise.
+pub(crate) fn pulse_bar(total: u64) -> ProgressBar {
+    if !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let b = ProgressBar::new(total);
+    if let Ok(style) = ProgressStyle::with_template(
+        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} pulses ({per_sec}, eta {eta})",
+    ) {
+        b.set_style(style);
+    }
+    b
+}
+
 /// Runs the survey into `output` and says how it went.
 fn simulate(
     survey: &Survey,
@@ -152,23 +179,12 @@ fn simulate(
              survey again"
         );
     }
-    let threads = match threads {
-        Some(0) => return fail(2, "--threads must be at least 1"),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    let threads = match threads_or_all(threads) {
+        Ok(n) => n,
+        Err(code) => return code,
     };
     let total: u64 = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
-    let bar = if std::io::stderr().is_terminal() {
-        let b = ProgressBar::new(total);
-        if let Ok(style) = ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} pulses ({per_sec}, eta {eta})",
-        ) {
-            b.set_style(style);
-        }
-        b
-    } else {
-        ProgressBar::hidden()
-    };
+    let bar = pulse_bar(total);
     let hold = hold_at_pulse();
     let progress = |done: u64| {
         bar.set_position(done);

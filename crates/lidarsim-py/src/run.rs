@@ -121,6 +121,7 @@ pub fn run<'py>(
             start: Default::default(),
             stop: Some(&watch.stop),
             pulse_budget: None,
+            only: None,
         };
         let outcome = {
             let mut sinks: [&mut (dyn PointSink + 'static); 1] = [&mut sink];

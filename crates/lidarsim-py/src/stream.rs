@@ -105,6 +105,7 @@ impl PointStream {
                 start: Default::default(),
                 stop: Some(&stop_flag),
                 pulse_budget: None,
+                only: None,
             };
             let progress = |n: u64| counter.store(n, Ordering::SeqCst);
             {

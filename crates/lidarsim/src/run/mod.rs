@@ -8,6 +8,7 @@
 //! report's sample waveforms are pulses simulated again ([`replay`]).
 
 pub mod outdir;
+pub mod part;
 pub mod replay;
 pub mod resume;
 
@@ -230,6 +231,26 @@ pub fn run_world_to_dir(
     out_dir: &Path,
     options: &RunOptions<'_>,
 ) -> Result<Summary, RunError> {
+    execute(survey, world, out_dir, options, Source::Simulate)
+}
+
+/// Where a run's points come from.
+pub(crate) enum Source<'a> {
+    /// The simulator.
+    Simulate,
+    /// The point files of the parts of a split run, in order, with the
+    /// counts and simulation time they recorded ([`part::merge`]).
+    Parts(&'a [part::PartInput]),
+}
+
+/// [`run_world_to_dir`] with the points from `source`.
+pub(crate) fn execute(
+    survey: &Survey,
+    world: &World,
+    out_dir: &Path,
+    options: &RunOptions<'_>,
+    source: Source<'_>,
+) -> Result<Summary, RunError> {
     let io_err = |path: &Path| {
         let path = path.to_path_buf();
         move |source| RunError { path, source }
@@ -294,24 +315,11 @@ pub fn run_world_to_dir(
     let mut sinks = open_sinks(survey, world, out_dir, prev.as_ref())?;
     let mut files: Vec<String> = names.iter().map(|n| n.to_string()).collect();
 
-    // The survey as run, with the seed fixed and file paths made absolute,
-    // so `lidarsim run DIR/survey.toml` repeats it and `lidarsim waveform`
-    // can simulate any pulse again (a resumed run has it already).
-    // Scene entries given as data are written beside it, as files it
-    // names.
-    let survey_path = out_dir.join("survey.toml");
-    for data in data_files(survey) {
-        if prev.is_none() {
-            let path = out_dir.join(&data.path);
-            data.write(out_dir).map_err(io_err(&path))?;
-        }
-        files.push(data.path);
-    }
+    // The survey as run (a resumed run has it already).
     if prev.is_none() {
-        let text = toml::to_string(&replayable_with_data(survey))
-            .map_err(|e| io_err(&survey_path)(io::Error::other(e)))?;
-        write_atomic(&survey_path, text.as_bytes()).map_err(io_err(&survey_path))?;
+        write_survey(survey, out_dir)?;
     }
+    files.extend(data_files(survey).into_iter().map(|d| d.path));
     files.push("survey.toml".to_string());
 
     // The trajectory flown (trajectory.csv, kept under its first name, and
@@ -349,8 +357,18 @@ pub fn run_world_to_dir(
         start,
         stop: options.stop,
         pulse_budget: options.pulse_budget,
+        only: None,
     };
-    let result = sim.run_from(options.threads, &mut refs, &progress, &control);
+    let (result, wall_parts) = match source {
+        Source::Simulate => (
+            sim.run_from(options.threads, &mut refs, &progress, &control),
+            None,
+        ),
+        Source::Parts(parts) => (
+            part::replay(parts, &mut refs, &progress),
+            Some(parts.iter().map(|p| p.wall_time_s).sum::<f64>()),
+        ),
+    };
     drop(refs);
     let outcome = match result {
         Ok(o) => o,
@@ -366,7 +384,8 @@ pub fn run_world_to_dir(
     let measured = |counts: RunCounts| Measured {
         counts,
         threads: options.threads,
-        wall_time_s: wall_before + timer.seconds(),
+        // A merge: the parts' simulation time, summed.
+        wall_time_s: wall_parts.unwrap_or(wall_before + timer.seconds()),
         index_time_s: world.index_time_s,
         scene_primitives: world.scene().primitives.len(),
         estimate: budget.clone(),
@@ -449,6 +468,24 @@ pub fn run_world_to_dir(
         _ => {}
     }
     Ok(summary)
+}
+
+/// Writes the survey as run into `out_dir/survey.toml`, with the seed
+/// fixed and file paths made absolute, so that `lidarsim run
+/// DIR/survey.toml` repeats it and `lidarsim waveform` can simulate any
+/// pulse again; scene entries given as data are written beside it, as
+/// files it names. Returns the survey's text.
+pub(crate) fn write_survey(survey: &Survey, out_dir: &Path) -> Result<String, RunError> {
+    let named = |path: PathBuf| move |source| RunError { path, source };
+    for data in data_files(survey) {
+        data.write(out_dir)
+            .map_err(named(out_dir.join(&data.path)))?;
+    }
+    let path = out_dir.join("survey.toml");
+    let text = toml::to_string(&replayable_with_data(survey))
+        .map_err(|e| named(path.clone())(io::Error::other(e)))?;
+    write_atomic(&path, text.as_bytes()).map_err(named(path))?;
+    Ok(text)
 }
 
 /// The part of the scene the flight lines can see: each line's bounding box

@@ -18,7 +18,7 @@ use super::RunError;
 pub const MARKER: &str = ".lidarsim-output";
 
 /// Every file a run may write, by its final name.
-pub const RUN_FILES: [&str; 12] = [
+pub const RUN_FILES: [&str; 14] = [
     "points.las",
     "points.laz",
     "points.ply",
@@ -31,6 +31,8 @@ pub const RUN_FILES: [&str; 12] = [
     "summary.json",
     "report.html",
     super::REPORT_STATE,
+    super::part::PART_POINTS,
+    super::part::PART_RECORD,
 ];
 
 /// The directory in which a run writes the scene entries a program gave

@@ -11,6 +11,7 @@
 
 mod executor;
 mod frames;
+pub mod parts;
 mod pulse;
 mod scratch;
 mod truth;
@@ -304,12 +305,32 @@ impl<'a> Simulator<'a> {
         let mut jobs: Vec<(usize, u64, u64)> = Vec::new();
         let mut budget_end = None;
         let mut sent = 0u64;
-        'lines: for (l, line) in self.lines.iter().enumerate().skip(control.start.line) {
-            let n = self.survey.pulses_of(line);
+        let whole: Vec<parts::PulseRange> = match control.only {
+            Some(_) => Vec::new(),
+            None => self
+                .lines
+                .iter()
+                .enumerate()
+                .map(|(line, l)| parts::PulseRange {
+                    line,
+                    start: 0,
+                    end: self.survey.pulses_of(l),
+                })
+                .collect(),
+        };
+        let ranges = control.only.unwrap_or(&whole);
+        'lines: for r in ranges {
+            let (l, n) = (
+                r.line,
+                r.end.min(self.survey.pulses_of(&self.lines[r.line])),
+            );
+            if (l, n) <= (control.start.line, control.start.pulse) {
+                continue;
+            }
             let mut k = if l == control.start.line {
-                control.start.pulse.min(n)
+                control.start.pulse.max(r.start)
             } else {
-                0
+                r.start
             };
             while k < n {
                 if control.pulse_budget.is_some_and(|b| sent >= b) {
@@ -414,6 +435,9 @@ pub struct RunControl<'a> {
     /// Stop once this many pulses were simulated, rounded up to a whole
     /// block (at the end of a line, where the line ends): a run in slices.
     pub pulse_budget: Option<u64>,
+    /// Simulate only these pulses, in this order (a part of a split
+    /// survey, [`parts`]); `None`: every pulse of every line.
+    pub only: Option<&'a [parts::PulseRange]>,
 }
 
 /// What [`Simulator::run_from`] did.

@@ -1,0 +1,100 @@
+//! `lidarsim run SURVEY --part K/N` (one part of a split run into its own
+//! directory) and `lidarsim merge PART_DIR... -o DIR` (the parts joined
+//! into the files of the unsplit run).
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use lidarsim::Survey;
+use lidarsim::run::RunOptions;
+use lidarsim::run::part::{merge as merge_parts, part_ranges, run_part as simulate_part};
+use lidarsim::world::World;
+
+use crate::INTERRUPTED;
+use crate::STOP;
+use crate::args::MergeArgs;
+use crate::console::{fail, warn};
+use crate::simulate::{pulse_bar, threads_or_all};
+
+/// Simulates part `k` of `n` into `output`.
+pub fn run_part(
+    survey: &Survey,
+    world: &World,
+    output: &Path,
+    threads: Option<usize>,
+    (k, n): (usize, usize),
+    overwrite: bool,
+) -> ExitCode {
+    warn(survey, world);
+    let threads = match threads_or_all(threads) {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
+    let total: u64 = part_ranges(survey, world, k, n)
+        .iter()
+        .map(|r| r.len())
+        .sum();
+    let bar = pulse_bar(total);
+    let progress = |done: u64| bar.set_position(done);
+    let options = RunOptions {
+        stop: Some(&STOP),
+        overwrite,
+        ..RunOptions::new(threads, &progress)
+    };
+    let result = simulate_part(survey, world, (k, n), output, &options);
+    bar.finish_and_clear();
+    match result {
+        Ok(r) if !r.complete => {
+            note!(
+                "part {k}/{n} interrupted: {} holds no points; run the part again",
+                output.display()
+            );
+            ExitCode::from(INTERRUPTED)
+        }
+        Ok(r) => {
+            note!(
+                "part {k}/{n}: {} pulses → {} points in {:.2} s on {} thread(s), in {}",
+                r.pulses,
+                r.points,
+                r.wall_time_s,
+                r.threads,
+                output.display()
+            );
+            note!("join the parts with: lidarsim merge PART_DIR... -o DIR");
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail(1, &e.to_string()),
+    }
+}
+
+/// `lidarsim merge`.
+pub fn merge(args: MergeArgs) -> ExitCode {
+    let MergeArgs {
+        parts,
+        output,
+        threads,
+        overwrite,
+        no_space_check,
+    } = args;
+    let threads = match threads_or_all(threads) {
+        Ok(t) => t,
+        Err(code) => return code,
+    };
+    let bar = pulse_bar(0);
+    let progress = |done: u64| bar.set_position(done);
+    let options = RunOptions {
+        overwrite,
+        no_space_check,
+        ..RunOptions::new(threads, &progress)
+    };
+    let result = merge_parts(&parts, &output, &options);
+    bar.finish_and_clear();
+    match result {
+        Ok(summary) => {
+            note!("merged {} parts", parts.len());
+            crate::summary::print(&summary, &output);
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail(1, &e.to_string()),
+    }
+}

@@ -1,0 +1,284 @@
+//! Runs split into parts (`lidarsim run --part K/N`) and merged
+//! (`lidarsim merge`) write the files of the unsplit run byte for byte, in
+//! every output format and for any number of parts, the parts run in any
+//! order; merges of parts that do not make one run are refused with the
+//! reason.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+use common::{bin, temp};
+
+/// Three lines of unequal length over a plane with a tree-lined roof, in
+/// every point format (full waveforms, LAZ, PLY, XYZ), with navigation
+/// errors: 3 × 0.5 to 1 s at 20 kHz.
+const SURVEY: &str = r#"seed = 17
+preset = "uav"
+
+[scanner]
+prf_hz = 20000
+scan_frequency_hz = 40
+scan_angle_deg = 18
+subrays = 7
+
+[receiver]
+noise = 0.01
+
+[[flight_line]]
+start_m = [0.0, -25.0, 150.0]
+end_m = [0.0, 25.0, 150.0]
+speed_mps = 50.0
+
+[[flight_line]]
+start_m = [30.0, 25.0, 150.0]
+end_m = [30.0, -15.0, 150.0]
+speed_mps = 50.0
+
+[[flight_line]]
+start_m = [-30.0, -25.0, 150.0]
+end_m = [-30.0, 0.0, 150.0]
+speed_mps = 50.0
+
+[output]
+formats = ["las-waveform", "laz", "ply", "xyz"]
+
+[materials.grass]
+reflectance = 0.35
+
+[materials.roof]
+reflectance = 0.2
+
+[[polygon]]
+material = "grass"
+class = "ground"
+vertices_m = [[-200, -200, 0], [200, -200, 0], [200, 200, 0], [-200, 200, 0]]
+
+[[polygon]]
+material = "roof"
+class = "roof"
+vertices_m = [[-12, -8, 6], [10, -8, 6], [10, 8, 9], [-12, 8, 9]]
+
+[[tree]]
+position_m = [20.0, 5.0, 0.0]
+species = "spruce"
+dbh_m = 0.3
+height_m = 18.0
+crown_base_m = 4.0
+"#;
+
+/// The same date in every LAS header, whichever day a test runs.
+const EPOCH: &str = "1700000000";
+
+fn lidarsim(args: &[&str]) -> Output {
+    bin()
+        .args(args)
+        .env("SOURCE_DATE_EPOCH", EPOCH)
+        .output()
+        .unwrap()
+}
+
+fn ok(o: &Output) {
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The files of an unsplit run that a merge writes the same bytes of.
+const SAME: [&str; 9] = [
+    "points.las",
+    "points.wdp",
+    "points.laz",
+    "points.ply",
+    "points.xyz",
+    "survey.toml",
+    "trajectory.csv",
+    "trajectory_true.csv",
+    "trajectory_observed.csv",
+];
+
+/// `summary.json` without its timings.
+fn summary(dir: &Path) -> serde_json::Value {
+    let mut v: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    let m = v.as_object_mut().unwrap();
+    for k in [
+        "wall_time_s",
+        "index_time_s",
+        "pulses_per_second",
+        "threads",
+    ] {
+        m.remove(k);
+    }
+    v
+}
+
+/// Runs the `n` parts of `survey` in the order `order` (1-based) into
+/// `dir/pN-K`; returns their directories.
+fn run_parts(dir: &Path, survey: &Path, n: usize, order: &[usize]) -> Vec<PathBuf> {
+    order
+        .iter()
+        .map(|&k| {
+            let out = dir.join(format!("p{n}-{k}"));
+            let part = format!("{k}/{n}");
+            ok(&lidarsim(&[
+                "run",
+                s(survey),
+                "--part",
+                &part,
+                "--threads",
+                "2",
+                "-o",
+                s(&out),
+            ]));
+            out
+        })
+        .collect()
+}
+
+#[test]
+fn merged_parts_are_the_unsplit_run_byte_for_byte() {
+    let dir = temp("parts");
+    let survey = dir.join("survey.toml");
+    std::fs::write(&survey, SURVEY).unwrap();
+    let whole = dir.join("whole");
+    ok(&lidarsim(&[
+        "run",
+        s(&survey),
+        "-o",
+        s(&whole),
+        "--threads",
+        "2",
+    ]));
+    let points = summary(&whole)["points"].as_u64().unwrap();
+    assert!(points > 40_000, "{points}");
+    // 1 part; 2 and 3 (whole lines: 1 s, 0.8 s, 0.5 s); 7 (lines cut).
+    for (n, order) in [
+        (1, vec![1]),
+        (2, vec![2, 1]),
+        (3, vec![3, 1, 2]),
+        (7, vec![5, 2, 7, 1, 6, 3, 4]),
+    ] {
+        let parts = run_parts(&dir, &survey, n, &order);
+        let merged = dir.join(format!("merged-{n}"));
+        let mut args = vec!["merge", "-o", s(&merged)];
+        args.extend(parts.iter().map(|p| s(p)));
+        ok(&lidarsim(&args));
+        for f in SAME {
+            let (a, b) = (
+                std::fs::read(whole.join(f)).unwrap(),
+                std::fs::read(merged.join(f)).unwrap(),
+            );
+            assert!(
+                a == b,
+                "{n} parts: {f} differs ({} vs {} bytes)",
+                a.len(),
+                b.len()
+            );
+        }
+        assert_eq!(summary(&whole), summary(&merged), "{n} parts: summary.json");
+        assert!(merged.join("report.html").exists());
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn merges_of_parts_that_are_not_one_run_are_refused() {
+    let dir = temp("bad-merge");
+    let survey = dir.join("survey.toml");
+    let short = SURVEY.replace(
+        "end_m = [-30.0, 0.0, 150.0]",
+        "end_m = [-30.0, -20.0, 150.0]",
+    );
+    std::fs::write(&survey, &short).unwrap();
+    let parts = run_parts(&dir, &survey, 3, &[1, 2, 3]);
+    let merge = |dirs: &[&Path]| {
+        let out = dir.join("merged");
+        let mut args = vec!["merge", "--overwrite", "-o", s(&out)];
+        args.extend(dirs.iter().map(|p| s(p)));
+        let o = lidarsim(&args);
+        assert!(!o.status.success());
+        let text = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(!text.contains("panicked"), "{text}");
+        text
+    };
+    let (p1, p2, p3) = (&parts[0], &parts[1], &parts[2]);
+    // A part missing, two missing, one given twice.
+    let e = merge(&[p1, p3]);
+    assert!(e.contains("part 2/3 is missing"), "{e}");
+    let e = merge(&[p2]);
+    assert!(e.contains("parts 1/3, 3/3 are missing"), "{e}");
+    let e = merge(&[p1, p2, p1, p3]);
+    assert!(e.contains("part 1/3 is given twice"), "{e}");
+    // A part of another number of parts, another seed, another survey.
+    let other_n = run_parts(&dir, &survey, 2, &[2]);
+    let e = merge(&[p1, p2, p3, &other_n[0]]);
+    assert!(e.contains("one of 2 parts, not 3"), "{e}");
+    let seeded = dir.join("seeded");
+    ok(&lidarsim(&[
+        "run",
+        s(&survey),
+        "--part",
+        "3/3",
+        "--seed",
+        "99",
+        "-o",
+        s(&seeded),
+    ]));
+    let e = merge(&[p1, p2, &seeded]);
+    assert!(
+        e.contains("survey.toml differs") || e.contains("seed"),
+        "{e}"
+    );
+    let other = dir.join("other.toml");
+    std::fs::write(&other, short.replace("noise = 0.01", "noise = 0.02")).unwrap();
+    let foreign = dir.join("foreign");
+    ok(&lidarsim(&[
+        "run",
+        s(&other),
+        "--part",
+        "3/3",
+        "-o",
+        s(&foreign),
+    ]));
+    let e = merge(&[p1, p2, &foreign]);
+    assert!(e.contains("survey.toml differs"), "{e}");
+    // Not a part; a point file cut short; a survey edited afterwards.
+    let e = merge(&[p1, p2, &dir]);
+    assert!(e.contains("not the directory of a part"), "{e}");
+    let cut = p3.join("points.part");
+    let bytes = std::fs::read(&cut).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() - 10]).unwrap();
+    let e = merge(&[p1, p2, p3]);
+    assert!(e.contains("cut short or changed"), "{e}");
+    std::fs::write(&cut, &bytes).unwrap();
+    let toml = p2.join("survey.toml");
+    let text = std::fs::read_to_string(&toml).unwrap();
+    std::fs::write(&toml, text.replace("seed = 17", "seed = 18")).unwrap();
+    let e = merge(&[p1, p2, p3]);
+    assert!(e.contains("was changed after the part ran"), "{e}");
+    std::fs::write(&toml, text).unwrap();
+    // Put right, the merge goes through.
+    let out = dir.join("merged");
+    let mut args = vec!["merge", "--overwrite", "-o", s(&out)];
+    args.extend([s(p3), s(p1), s(p2)]);
+    ok(&lidarsim(&args));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn a_bad_part_argument_is_refused() {
+    let dir = temp("bad-part");
+    let survey = dir.join("survey.toml");
+    std::fs::write(&survey, SURVEY).unwrap();
+    for bad in ["0/3", "4/3", "x/3", "3", "1/0"] {
+        let o = lidarsim(&["run", s(&survey), "--part", bad, "-o", s(&dir.join("o"))]);
+        assert_eq!(o.status.code(), Some(2), "{bad}");
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("K/N") || e.contains("K must be"), "{bad}: {e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
