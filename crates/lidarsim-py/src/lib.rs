@@ -23,6 +23,20 @@ pyo3::create_exception!(
      `e.diagnostics` holds them as dicts (file, line, column, key, message, help)."
 );
 
+/// Merges the parts of a split run (directories of `run_part`) into
+/// `out_dir`: the files of the unsplit run; returns its summary.
+#[pyfunction]
+#[pyo3(signature = (part_dirs, out_dir, threads, overwrite=false))]
+fn merge<'py>(
+    py: Python<'py>,
+    part_dirs: Vec<std::path::PathBuf>,
+    out_dir: std::path::PathBuf,
+    threads: usize,
+    overwrite: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    run::merge(py, part_dirs, &out_dir, threads, overwrite)
+}
+
 /// The module: refuses to load on a processor without the instructions the
 /// build targets, as the command line does.
 #[pymodule]
@@ -41,5 +55,6 @@ fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("TRAJECTORY_FIELDS", points::TRAJECTORY_FIELDS.to_vec())?;
     m.add_class::<survey::SurveyCore>()?;
     m.add_class::<stream::PointStream>()?;
+    m.add_function(wrap_pyfunction!(merge, m)?)?;
     Ok(())
 }

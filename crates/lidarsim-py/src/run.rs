@@ -206,3 +206,68 @@ pub fn run_to<'py>(
         .map_err(|e| PyValueError::new_err(format!("cannot write the summary: {e}")))?;
     json_to_py(py, &text)
 }
+
+/// Simulates part `k` of `n` of the survey into `out_dir` (points.part,
+/// part.json, survey.toml) and returns its record as a dict.
+pub fn run_part<'py>(
+    py: Python<'py>,
+    core: &SurveyCore,
+    out_dir: &Path,
+    (k, n): (usize, usize),
+    threads: usize,
+    overwrite: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    check_threads(threads)?;
+    if n == 0 || !(1..=n).contains(&k) {
+        return Err(PyValueError::new_err(format!(
+            "part {k}/{n}: K must be from 1 to N, and N at least 1"
+        )));
+    }
+    let world = core.world(py)?;
+    let survey = &*core.survey;
+    let watch = Watch::new(None, 0);
+    let result = py.detach(|| {
+        let tick = |n| watch.tick(n);
+        let options = RunOptions {
+            stop: Some(&watch.stop),
+            overwrite,
+            ..RunOptions::new(threads, &tick)
+        };
+        lidarsim::run::part::run_part(survey, &world, (k, n), out_dir, &options)
+    });
+    if let Some(e) = watch.take_error() {
+        return Err(e);
+    }
+    let record = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
+    let text = serde_json::to_string(&record)
+        .map_err(|e| PyValueError::new_err(format!("cannot write the record: {e}")))?;
+    json_to_py(py, &text)
+}
+
+/// Merges the parts in `part_dirs` into `out_dir` and returns the summary.
+pub fn merge<'py>(
+    py: Python<'py>,
+    part_dirs: Vec<std::path::PathBuf>,
+    out_dir: &Path,
+    threads: usize,
+    overwrite: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    check_threads(threads)?;
+    let watch = Watch::new(None, 0);
+    let result = py.detach(|| {
+        let tick = |n| watch.tick(n);
+        let options = RunOptions {
+            stop: Some(&watch.stop),
+            overwrite,
+            ..RunOptions::new(threads, &tick)
+        };
+        lidarsim::run::part::merge(&part_dirs, out_dir, &options)
+    });
+    if let Some(e) = watch.take_error() {
+        return Err(e);
+    }
+    let summary = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
+    let text = serde_json::to_string(&summary)
+        .map_err(|e| PyValueError::new_err(format!("cannot write the summary: {e}")))?;
+    json_to_py(py, &text)
+}

@@ -256,6 +256,20 @@ impl SurveyCore {
         self.cloud_from_arrays(py, points, voxel_m, material, class_name, classes)
     }
 
+    /// Part `k` of `n` into a directory: see `run.rs`.
+    #[pyo3(signature = (out_dir, k, n, threads, overwrite=false))]
+    fn run_part<'py>(
+        &self,
+        py: Python<'py>,
+        out_dir: PathBuf,
+        k: usize,
+        n: usize,
+        threads: usize,
+        overwrite: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        crate::run::run_part(py, self, &out_dir, (k, n), threads, overwrite)
+    }
+
     /// A streamed run: see `stream.rs`.
     #[pyo3(signature = (threads, min_points))]
     fn stream(

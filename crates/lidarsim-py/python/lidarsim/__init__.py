@@ -36,6 +36,7 @@ from ._lidarsim import SurveyError
 
 __all__ = [
     "POINT_DTYPE",
+    "merge",
     "TRAJECTORY_DTYPE",
     "Result",
     "Survey",
@@ -412,6 +413,23 @@ class Survey:
             las_header=raw["las"],
         )
 
+    def run_part(
+        self,
+        out_dir: PathLike,
+        part: int,
+        parts: int,
+        threads: Optional[int] = None,
+        overwrite: bool = False,
+    ) -> Dict[str, Any]:
+        """Simulates part ``part`` of ``parts`` (from 1) of the survey into
+        ``out_dir``, as ``lidarsim run SURVEY --part K/N`` does, and returns
+        the part's record (``part.json``). :func:`merge` joins the parts
+        into the files one run writes; :mod:`lidarsim.distributed` runs
+        them on a Dask cluster."""
+        return self._core.run_part(
+            os.fspath(out_dir), int(part), int(parts), _threads(threads), overwrite
+        )
+
     def stream(
         self,
         block_points: int = 1_000_000,
@@ -602,3 +620,19 @@ class Result:
         for name, _ in extra:
             las[name] = p[name]
         return las
+
+
+def merge(
+    part_dirs: "list",
+    out_dir: PathLike,
+    threads: Optional[int] = None,
+    overwrite: bool = False,
+) -> Dict[str, Any]:
+    """Merges the directories of the parts of one split run (in any order)
+    into ``out_dir``: the files the unsplit run writes, byte for byte
+    (``summary.json``'s timings apart); returns the summary. Refuses, with
+    an ``OSError`` naming it, a part missing, given twice, unfinished,
+    changed, or of another survey, seed or number of parts."""
+    return _lidarsim.merge(
+        [os.fspath(p) for p in part_dirs], os.fspath(out_dir), _threads(threads), overwrite
+    )

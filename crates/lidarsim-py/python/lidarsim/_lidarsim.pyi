@@ -12,6 +12,8 @@ TRAJECTORY_FIELDS: List[Tuple[str, str]]
 class SurveyError(ValueError):
     diagnostics: List[Dict[str, Any]]
 
+def merge(part_dirs: List[str], out_dir: str, threads: int, overwrite: bool = False) -> Dict[str, Any]: ...
+
 class PointStream(Iterator["np.ndarray"]):
     pulses_done: int
     pulses_total: int
@@ -74,3 +76,6 @@ class SurveyCore:
         class_name: Optional[str],
         classes: Optional["np.ndarray"],
     ) -> "SurveyCore": ...
+    def run_part(
+        self, out_dir: str, k: int, n: int, threads: int, overwrite: bool = False
+    ) -> Dict[str, Any]: ...

@@ -1,0 +1,182 @@
+"""A survey split into parts run on a Dask cluster, merged into the files
+one run writes, byte for byte.
+
+::
+
+    from distributed import Client, LocalCluster
+    import lidarsim, lidarsim.distributed
+
+    client = Client(LocalCluster(n_workers=2, threads_per_worker=1))
+    survey = lidarsim.Survey.load("campaign.toml")
+    summary = lidarsim.distributed.run(survey, client, out="campaign-out")
+
+Any ``distributed.Client`` will do: a local cluster, dask-jobqueue's
+``SLURMCluster`` or ``PBSCluster``, Kubernetes. Each part is one task (part
+K of N simulates its stretch of the pulses, see ``lidarsim run --part``);
+a part whose worker dies is run again elsewhere, and a part that fails is
+retried. Parts write into a directory beside ``out`` that every worker
+sees (``shared=True``, the usual HPC setup) or, with ``shared=False``, into
+a worker's temporary directory whose files travel back to the client. The
+client then merges them into ``out``.
+
+The survey travels to the workers as its TOML text (file paths absolute:
+meshes, rasters and point clouds must be readable there) with any scene
+parts given as arrays.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any, Dict, Optional, Tuple, Union
+
+from . import Survey, merge
+
+__all__ = ["run", "merge"]
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+
+def _part_name(k: int, n: int) -> str:
+    return f"part-{k:04d}-of-{n:04d}"
+
+
+def _run_part(
+    spec: Tuple[str, tuple], k: int, n: int, shared: Optional[str], threads: int
+) -> Dict[str, Any]:
+    """A worker's task: part ``k`` of ``n`` of the survey ``spec`` (TOML
+    text and array parts), into ``shared/part-K-of-N`` or, without a shared
+    directory, into a temporary one whose files are returned."""
+    text, data = spec
+    survey = Survey.from_toml(text)._with_data(data)
+    if shared is not None:
+        out = Path(shared) / _part_name(k, n)
+        record = survey._core.run_part(os.fspath(out), k, n, threads, True)
+        return {"part": k, "record": record, "dir": os.fspath(out)}
+    with tempfile.TemporaryDirectory(prefix="lidarsim-part-") as tmp:
+        out = Path(tmp) / _part_name(k, n)
+        record = survey._core.run_part(os.fspath(out), k, n, threads, True)
+        files = {
+            os.fspath(p.relative_to(out)): p.read_bytes() for p in out.rglob("*") if p.is_file()
+        }
+    return {"part": k, "record": record, "files": files}
+
+
+def run(
+    survey: Survey,
+    client: Any,
+    out: PathLike,
+    parts: Optional[int] = None,
+    threads_per_part: int = 1,
+    shared: bool = True,
+    parts_dir: Optional[PathLike] = None,
+    keep_parts: bool = False,
+    retries: int = 2,
+    overwrite: bool = False,
+    progress: Any = True,
+) -> Dict[str, Any]:
+    """Runs ``survey`` split into ``parts`` parts (by default one per
+    worker thread of ``client``'s cluster) as tasks on ``client``, and
+    merges them into ``out``: the files of ``survey.run_to(out)``, byte for
+    byte (``summary.json``'s timings apart). Returns the merged run's
+    summary.
+
+    ``threads_per_part``: threads each part simulates on (match the
+    workers' threads). ``shared``: parts write into ``parts_dir`` (default
+    ``OUT.parts`` beside ``out``), which every worker must see; False:
+    each part's files come back to the client. ``keep_parts``: keep the
+    parts' directories after merging. ``retries``: runs of a part that
+    failed with an error before giving up (a part whose worker died is run
+    again by the scheduler in any case). ``progress``: True for a line of
+    parts done and pulses per second, False for none, or a callable
+    ``f(parts_done, parts_total, pulses_per_second)``."""
+    from distributed import as_completed
+
+    out = Path(out)
+    if parts is None:
+        threads = sum(client.nthreads().values()) or 1
+        parts = max(1, threads // max(1, threads_per_part))
+    if parts < 1:
+        raise ValueError(f"parts must be at least 1, got {parts}")
+    where = Path(parts_dir) if parts_dir is not None else out.with_name(out.name + ".parts")
+    where = where.resolve()
+    where.mkdir(parents=True, exist_ok=True)
+    spec = (survey.to_toml(), survey._data)
+    token = f"{os.getpid()}-{time.monotonic_ns()}"
+    futures = [
+        client.submit(
+            _run_part,
+            spec,
+            k,
+            parts,
+            os.fspath(where) if shared else None,
+            threads_per_part,
+            key=f"lidarsim-{_part_name(k, parts)}-{token}",
+            retries=retries,
+            pure=False,
+        )
+        for k in range(1, parts + 1)
+    ]
+    report = _Report(progress, parts)
+    started = time.monotonic()
+    slots = 0
+    dirs: Dict[int, Path] = {}
+    try:
+        for done, future in enumerate(as_completed(futures), start=1):
+            result = future.result()
+            k = result["part"]
+            if "files" in result:
+                target = where / _part_name(k, parts)
+                if target.exists():
+                    shutil.rmtree(target)
+                for name, data in result["files"].items():
+                    path = target / name
+                    path.parent.mkdir(parents=True, exist_ok=True)
+                    path.write_bytes(data)
+                dirs[k] = target
+            else:
+                dirs[k] = Path(result["dir"])
+            slots += result["record"]["pulse_slots"]
+            report(done, slots / max(time.monotonic() - started, 1e-9))
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        raise
+    finally:
+        report.close()
+    summary = merge([dirs[k] for k in sorted(dirs)], out, overwrite=overwrite)
+    if not keep_parts:
+        for d in dirs.values():
+            shutil.rmtree(d, ignore_errors=True)
+        try:
+            where.rmdir()
+        except OSError:
+            pass
+    return summary
+
+
+class _Report:
+    """Progress of a distributed run: a callable, or a line on stderr."""
+
+    def __init__(self, progress: Any, total: int) -> None:
+        self.total = total
+        self.callback = progress if callable(progress) else None
+        self.line = progress is True
+        self.shown = False
+
+    def __call__(self, done: int, rate: float) -> None:
+        if self.callback is not None:
+            self.callback(done, self.total, rate)
+        elif self.line:
+            sys.stderr.write(f"\rparts {done}/{self.total} done, {rate:,.0f} pulses/s")
+            sys.stderr.flush()
+            self.shown = True
+
+    def close(self) -> None:
+        if self.shown:
+            sys.stderr.write("\n")
+
