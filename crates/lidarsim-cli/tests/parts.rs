@@ -185,6 +185,60 @@ fn merged_parts_are_the_unsplit_run_byte_for_byte() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Every file under `dir`, relative to it, sorted.
+fn tree(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push(p.strip_prefix(dir).unwrap().to_path_buf());
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn merged_strips_and_tiles_are_the_unsplit_runs() {
+    let dir = temp("parts-layouts");
+    for (name, layout, n) in [
+        ("strips", "layout = \"strips\"", 3),
+        ("tiles", "layout = \"tiles\"\ntile_m = 40", 2),
+    ] {
+        let survey = dir.join(format!("{name}.toml"));
+        let text = SURVEY.replace(
+            "formats = [\"las-waveform\", \"laz\", \"ply\", \"xyz\"]",
+            &format!("formats = [\"las\", \"laz\", \"xyz\"]\n{layout}"),
+        );
+        std::fs::write(&survey, text).unwrap();
+        let whole = dir.join(format!("{name}-whole"));
+        ok(&lidarsim(&["run", s(&survey), "-o", s(&whole)]));
+        let order: Vec<usize> = (1..=n).rev().collect();
+        let parts = run_parts(&dir, &survey, n, &order);
+        let merged = dir.join(format!("{name}-merged"));
+        let mut args = vec!["merge", "-o", s(&merged)];
+        args.extend(parts.iter().map(|p| s(p)));
+        ok(&lidarsim(&args));
+        let files = tree(&whole.join(name));
+        assert!(files.len() > 3, "{name}: {files:?}");
+        assert_eq!(tree(&merged.join(name)), files, "{name}");
+        for f in files {
+            assert!(
+                std::fs::read(whole.join(name).join(&f)).unwrap()
+                    == std::fs::read(merged.join(name).join(&f)).unwrap(),
+                "{name}: {} differs",
+                f.display()
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn merges_of_parts_that_are_not_one_run_are_refused() {
     let dir = temp("bad-merge");

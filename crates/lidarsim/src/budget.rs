@@ -202,6 +202,7 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
         })
     };
     let las = crate::files::las_settings_for(survey, b, lines);
+    let single = o.layout == crate::survey::Layout::Single;
     if f.las {
         let mut s = las.clone();
         if f.las_waveform {
@@ -210,7 +211,10 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
                 1.0,
             ));
         }
-        add("points.las", s.file_len(points));
+        add(
+            if single { "points.las" } else { "LAS files" },
+            s.file_len(points),
+        );
     }
     if f.las_waveform {
         // Each pulse with an echo keeps its record: the pulse shape, the
@@ -230,7 +234,10 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
     }
     if f.laz {
         // LASzip keeps a third or less of the bytes of airborne points.
-        add("points.laz", las.file_len(points) * 2 / 5);
+        add(
+            if single { "points.laz" } else { "LAZ files" },
+            las.file_len(points) * 2 / 5,
+        );
     }
     if f.ply {
         add("points.ply", crate::output::PlyWriter::file_len(points));

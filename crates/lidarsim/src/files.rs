@@ -8,23 +8,35 @@ use std::path::{Path, PathBuf};
 use crate::output::{AtomicFile, LasSettings};
 use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
-use crate::survey::Survey;
+use crate::survey::{Layout, Survey};
 use crate::world::World;
 
-/// The point files a survey writes, by final name (`points.wdp` with
-/// full waveforms).
+/// The single point files a survey writes, by final name (`points.wdp`
+/// with full waveforms); LAS and LAZ points laid out in strips or tiles
+/// are in [`layout_dir`] instead.
 pub fn point_files(survey: &Survey) -> Vec<&'static str> {
     let f = &survey.output.formats;
+    let single = survey.output.layout == Layout::Single;
     [
-        ("points.las", f.las),
+        ("points.las", f.las && single),
         ("points.wdp", f.las_waveform),
-        ("points.laz", f.laz),
+        ("points.laz", f.laz && single),
         ("points.ply", f.ply),
         ("points.xyz", f.xyz),
     ]
     .into_iter()
     .filter_map(|(n, on)| on.then_some(n))
     .collect()
+}
+
+/// The directory of the LAS and LAZ files of a survey laid out in strips
+/// (`strips`) or tiles (`tiles`).
+pub fn layout_dir(survey: &Survey) -> Option<&'static str> {
+    match survey.output.layout {
+        Layout::Single => None,
+        Layout::Strips => Some("strips"),
+        Layout::Tiles(_) => Some("tiles"),
+    }
 }
 
 /// The files `survey` reads: the survey file, meshes, rasters, point

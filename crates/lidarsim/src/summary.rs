@@ -122,7 +122,8 @@ impl Summary {
         Summary {
             lidarsim_version: env!("CARGO_PKG_VERSION"),
             complete: true,
-            resumable: !survey.output.formats.laz,
+            resumable: !survey.output.formats.laz
+                && survey.output.layout == crate::survey::Layout::Single,
             next_pulse: None,
             resume: None,
             seed: survey.seed,

@@ -10,6 +10,7 @@
 
 pub mod crs;
 mod las;
+pub mod layout;
 pub mod part;
 mod ply;
 mod xyz;

@@ -88,7 +88,8 @@ impl PointSink for PartWriter {
     fn discard(self: Box<Self>) {}
 }
 
-fn encode(p: &PointRecord, b: &mut Vec<u8>) {
+/// Appends the bytes of `p` to `b`.
+pub(crate) fn encode(p: &PointRecord, b: &mut Vec<u8>) {
     let f64s = |b: &mut Vec<u8>, v: &[f64]| {
         for x in v {
             b.extend_from_slice(&x.to_le_bytes());
@@ -142,7 +143,8 @@ impl Cursor<'_> {
     }
 }
 
-fn decode(bytes: &[u8]) -> PointRecord {
+/// The point of [`RECORD_BYTES`] bytes written by [`encode`].
+pub(crate) fn decode(bytes: &[u8]) -> PointRecord {
     let mut c = Cursor(bytes);
     let position_m = c.vec3();
     let gps_time_s = c.f64();

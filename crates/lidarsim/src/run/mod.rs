@@ -23,6 +23,7 @@ use crate::files::{
     data_files, digitizer, input_files, las_settings, point_files, replayable_with_data,
     write_trajectory,
 };
+use crate::output::layout::{StripWriter, TileWriter};
 use crate::output::{
     FileError, LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter, write_atomic,
 };
@@ -30,7 +31,7 @@ use crate::plan::{Plan, plan};
 use crate::report::ReportSink;
 use crate::sim::{PulsePosition, RunControl, RunCounts, Simulator, Timer};
 use crate::summary::Measured;
-use crate::survey::Survey;
+use crate::survey::{Layout, Survey};
 use crate::world::World;
 
 /// A failure while writing the results.
@@ -157,7 +158,29 @@ fn open_sinks(
     };
     let continued = |e| run_error(out_dir, e);
     let mut sinks: Vec<Box<dyn PointSink>> = Vec::new();
-    if formats.las {
+    if let Some(dir) = crate::files::layout_dir(survey) {
+        let dir = out_dir.join(dir);
+        let settings: Vec<LasSettings> = [(formats.las, false), (formats.laz, true)]
+            .into_iter()
+            .filter(|(on, _)| *on)
+            .map(|(_, compressed)| LasSettings {
+                compressed,
+                ..las_settings(survey, world)
+            })
+            .collect();
+        if let Layout::Tiles(tile_m) = survey.output.layout {
+            sinks.push(Box::new(
+                TileWriter::create(&dir, settings, tile_m, origin).map_err(created(&dir))?,
+            ));
+        } else {
+            for s in settings {
+                sinks.push(Box::new(
+                    StripWriter::create(&dir, s).map_err(created(&dir))?,
+                ));
+            }
+        }
+    }
+    if formats.las && survey.output.layout == Layout::Single {
         let path = out_dir.join("points.las");
         let mut settings = las_settings(survey, world);
         if formats.las_waveform {
@@ -178,7 +201,7 @@ fn open_sinks(
             }
         });
     }
-    if formats.laz {
+    if formats.laz && survey.output.layout == Layout::Single {
         let path = out_dir.join("points.laz");
         // With "las-waveform" too, the LAZ points are format 9 and refer to
         // the points.wdp the LAS writer writes (same base name, same
@@ -268,6 +291,17 @@ pub(crate) fn execute(
                 ),
             });
         }
+        if let Some(dir) = crate::files::layout_dir(survey) {
+            return Err(RunError {
+                path: summary_path,
+                source: io::Error::new(
+                    io::ErrorKind::Unsupported,
+                    format!(
+                        "this run wrote {dir}, which cannot be continued: run the survey again"
+                    ),
+                ),
+            });
+        }
         let (prev, state) = resume::read(out_dir, survey, &world.lines, &names)?;
         (Some(prev), state)
     } else {
@@ -314,6 +348,10 @@ pub(crate) fn execute(
 
     let mut sinks = open_sinks(survey, world, out_dir, prev.as_ref())?;
     let mut files: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+    let layout_files = files.len();
+    if let Some(dir) = crate::files::layout_dir(survey) {
+        files.push(format!("{dir}/"));
+    }
 
     // The survey as run (a resumed run has it already).
     if prev.is_none() {
@@ -404,7 +442,7 @@ pub(crate) fn execute(
         let next = NextPulse::of(next);
         let record = resume::record(out_dir, &names, survey.seed, next, &counts, &state)
             .map_err(|e| run_error(out_dir, e))?;
-        for f in files.iter_mut().take(names.len()) {
+        for f in files.iter_mut().take(layout_files) {
             f.push_str(".partial");
         }
         files.push(REPORT_STATE.to_string());

@@ -46,6 +46,9 @@ pub fn is_run_file(name: &str) -> bool {
     name == MARKER || RUN_FILES.contains(&base)
 }
 
+/// The directories of strips and tiles ([`crate::files::layout_dir`]).
+pub const LAYOUT_DIRS: [&str; 2] = ["strips", "tiles"];
+
 /// Whether `name` is a file a run writes into [`DATA_DIR`]:
 /// `mesh-I.obj`, `terrain-I.tif` or `point_cloud-I.xyz`.
 pub fn is_data_file(name: &str) -> bool {
@@ -62,24 +65,50 @@ pub fn is_data_file(name: &str) -> bool {
     })
 }
 
-/// The files of `dir/DATA_DIR` if it is a directory holding only files a
+/// Whether `name` is a file a run writes into a strips or tiles
+/// directory: `line-NNNN.las`/`.laz`, `tile_X_Y.las`/`.laz`, the tiles'
+/// `index.geojson`, the same with `.partial`, and the `.spill` directory.
+pub fn is_layout_file(name: &str) -> bool {
+    let base = name.strip_suffix(".partial").unwrap_or(name);
+    let las = |stem: &str| {
+        [".las", ".laz"]
+            .iter()
+            .any(|ext| base.strip_prefix(stem).is_some_and(|r| r.ends_with(ext)))
+    };
+    las("line-") || las("tile_") || base == "index.geojson" || name == ".spill"
+}
+
+/// The entries of `dir/sub` if it is a directory holding only entries a
 /// run writes there (`None` otherwise).
-fn data_dir_files(dir: &Path) -> Option<Vec<PathBuf>> {
-    let data = dir.join(DATA_DIR);
-    let meta = std::fs::symlink_metadata(&data).ok()?;
+fn own_dir_entries(dir: &Path, sub: &str, ours: fn(&str) -> bool) -> Option<Vec<PathBuf>> {
+    let path = dir.join(sub);
+    let meta = std::fs::symlink_metadata(&path).ok()?;
     if !meta.is_dir() {
         return None;
     }
-    let mut files = Vec::new();
-    for entry in std::fs::read_dir(&data).ok()? {
+    let mut entries = Vec::new();
+    for entry in std::fs::read_dir(&path).ok()? {
         let entry = entry.ok()?;
-        let is_file = entry.file_type().ok()?.is_file();
-        if !(is_file && is_data_file(&entry.file_name().to_string_lossy())) {
+        if entry.file_type().ok()?.is_symlink() || !ours(&entry.file_name().to_string_lossy()) {
             return None;
         }
-        files.push(entry.path());
+        entries.push(entry.path());
     }
-    Some(files)
+    Some(entries)
+}
+
+/// The run's own subdirectories of `dir` with their entries.
+fn own_dirs(dir: &Path) -> Vec<(&'static str, Vec<PathBuf>)> {
+    let mut out = Vec::new();
+    if let Some(e) = own_dir_entries(dir, DATA_DIR, is_data_file) {
+        out.push((DATA_DIR, e));
+    }
+    for sub in LAYOUT_DIRS {
+        if let Some(e) = own_dir_entries(dir, sub, is_layout_file) {
+            out.push((sub, e));
+        }
+    }
+    out
 }
 
 fn error(path: &Path, kind: io::ErrorKind, message: String) -> RunError {
@@ -139,13 +168,13 @@ pub fn prepare_fresh(dir: &Path, overwrite: bool) -> Result<(), RunError> {
     };
     let mut ours = Vec::new();
     let mut others = Vec::new();
-    let data = data_dir_files(dir);
+    let own = own_dirs(dir);
     for entry in std::fs::read_dir(dir).map_err(listed)? {
         let entry = entry.map_err(listed)?;
         let name = entry.file_name().to_string_lossy().into_owned();
         if is_run_file(&name) {
             ours.push(entry.path());
-        } else if !(name == DATA_DIR && data.is_some()) {
+        } else if !own.iter().any(|(sub, _)| *sub == name) {
             others.push(name);
         }
     }
@@ -188,15 +217,21 @@ pub fn prepare_fresh(dir: &Path, overwrite: bool) -> Result<(), RunError> {
             source: e,
         })?;
     }
-    // The scene data an earlier run wrote, and its directory.
-    if let Some(files) = data {
-        for path in files {
-            std::fs::remove_file(&path).map_err(|e| RunError {
+    // The scene data, strips and tiles an earlier run wrote, and their
+    // directories.
+    for (sub, entries) in own {
+        for path in entries {
+            let removed = if path.is_dir() {
+                std::fs::remove_dir_all(&path)
+            } else {
+                std::fs::remove_file(&path)
+            };
+            removed.map_err(|e| RunError {
                 path: path.clone(),
                 source: e,
             })?;
         }
-        let path = dir.join(DATA_DIR);
+        let path = dir.join(sub);
         std::fs::remove_dir(&path).map_err(|e| RunError { path, source: e })?;
     }
     crate::output::write_atomic(

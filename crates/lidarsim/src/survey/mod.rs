@@ -156,6 +156,22 @@ pub struct OutputSettings {
     /// Added to world coordinates in every output (points and
     /// trajectories), m: `offset_m = [E, N, H]`.
     pub offset_m: DVec3,
+    /// How the LAS and LAZ points are laid out in files.
+    pub layout: Layout,
+}
+
+/// How the LAS and LAZ points of a run are laid out in files.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Layout {
+    /// One file: `points.las`, `points.laz`.
+    #[default]
+    Single,
+    /// One file per flight line: `strips/line-NNNN.las` (`.laz`).
+    Strips,
+    /// One file per square tile of this edge, m, aligned to its multiples
+    /// in output coordinates: `tiles/tile_X_Y.las` (`.laz`), with
+    /// `tiles/index.geojson`.
+    Tiles(f64),
 }
 
 /// A checked survey: settings only. [`crate::world::World::build`] makes

@@ -204,6 +204,10 @@ pub struct RawOutput {
     pub crs: Option<String>,
     pub crs_wkt: Option<String>,
     pub offset_m: Option<Vec<f64>>,
+    /// `"single"` (default), `"strips"` (a LAS/LAZ file per flight line)
+    /// or `"tiles"` (per square tile of `tile_m`).
+    pub layout: Option<String>,
+    pub tile_m: Option<f64>,
 }
 
 /// `[materials.NAME]`.

@@ -3,7 +3,7 @@
 
 use super::Checker;
 use crate::geometry::DVec3;
-use crate::survey::{Formats, KeyPath, OutputSettings, RawSurvey};
+use crate::survey::{Formats, KeyPath, Layout, OutputSettings, RawSurvey};
 
 /// Checks `[output]` (the LAS scale against the survey's extent is checked
 /// once the scene and the lines are known, by [`crate::world`]).
@@ -140,8 +140,55 @@ pub(crate) fn output(c: &mut Checker, raw: &RawSurvey) -> OutputSettings {
         1.0,
         " m",
     );
+    let layout = match o.layout.as_deref() {
+        None | Some("single") => {
+            if o.tile_m.is_some() {
+                c.err(
+                    op.key("tile_m"),
+                    "applies to layout = \"tiles\" only".to_string(),
+                );
+            }
+            Layout::Single
+        }
+        Some(kind @ ("strips" | "tiles")) => {
+            if formats.las_waveform || !(formats.las || formats.laz) {
+                c.err(
+                    op.key("layout"),
+                    format!(
+                        "\"{kind}\" lays out LAS and LAZ points without waveforms: use \
+                         formats \"las\" or \"laz\" (not \"las-waveform\")"
+                    ),
+                );
+            }
+            if kind == "strips" {
+                if o.tile_m.is_some() {
+                    c.err(
+                        op.key("tile_m"),
+                        "applies to layout = \"tiles\" only".to_string(),
+                    );
+                }
+                Layout::Strips
+            } else {
+                if o.tile_m.is_none() {
+                    c.err(
+                        op.key("tile_m"),
+                        "is required with layout = \"tiles\"".to_string(),
+                    );
+                }
+                Layout::Tiles(c.number(op.key("tile_m"), o.tile_m, 1000.0, 1.0, false, 1e6, " m"))
+            }
+        }
+        Some(other) => {
+            c.err(
+                op.key("layout"),
+                format!("unknown layout \"{other}\": expected \"single\", \"strips\" or \"tiles\""),
+            );
+            Layout::Single
+        }
+    };
     OutputSettings {
         formats,
+        layout,
         trajectory_interval_s,
         gps_start_time_s,
         las_scale_m,
