@@ -5,25 +5,27 @@
 # into target/pyenv by check_las.sh and check_python.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# Each step's heading says how long the suite has run so far.
+step() { echo "== $1 (at $((SECONDS / 60))m$((SECONDS % 60))s)"; }
 
-echo "== cargo fmt --check"
+step "cargo fmt --check"
 cargo fmt --all --check
-echo "== cargo clippy"
+step "cargo clippy"
 cargo clippy --all-targets --quiet -- -D warnings
-echo "== cargo doc"
+step "cargo doc"
 RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --quiet
-echo "== module layers: no import cycle, no long file without a reason"
+step "module layers: no import cycle, no long file without a reason"
 python3 scripts/check_layers.py
-echo "== cargo test"
+step "cargo test"
 cargo test --quiet
-echo "== cargo test, portable build (-C target-cpu=x86-64: the scalar kernels)"
+step "cargo test, portable build (-C target-cpu=x86-64: the scalar kernels)"
 CARGO_TARGET_DIR=target/portable RUSTFLAGS="-C target-cpu=x86-64" cargo test --quiet
-echo "== demo + independent LAS check (laspy)"
+step "demo + independent LAS check (laspy)"
 scripts/check_las.sh
-echo "== the Python package: wheel (maturin) and its tests (pytest)"
+step "the Python package: wheel (maturin) and its tests (pytest)"
 scripts/check_python.sh
-echo "== the scalar kernels write the same bytes as the AVX2 kernels"
+step "the scalar kernels write the same bytes as the AVX2 kernels"
 scripts/check_portable.sh
-echo "== memory stays flat in flight length; 100 M pulses in 1 GiB"
+step "memory stays flat in flight length; 100 M pulses in 1 GiB"
 python3 scripts/check_memory.py target/release/lidarsim
-echo "== all checks passed"
+step "all checks passed"

@@ -24,6 +24,10 @@ use crate::survey::SurveyCore;
 /// How often the progress callback is called at most.
 const PROGRESS_EVERY: Duration = Duration::from_millis(100);
 
+/// How often a run takes the GIL to look at Python's signals at most
+/// (each time may wait for another thread to let the GIL go).
+const LOOK_EVERY: Duration = Duration::from_millis(50);
+
 /// What a run watches between blocks: Python's signals (Ctrl-C raises
 /// `KeyboardInterrupt` in the main thread) and the progress callback. The
 /// first error stops the run; it is raised once the run has returned.
@@ -33,16 +37,29 @@ struct Watch {
     progress: Option<Py<PyAny>>,
     total: u64,
     last: Mutex<Option<Instant>>,
+    last_look: Mutex<Option<Instant>>,
+    /// Whether the run was called from Python's main thread, the only one
+    /// that sees signals (a Dask worker runs tasks on other threads).
+    main_thread: bool,
 }
 
 impl Watch {
     fn new(progress: Option<Py<PyAny>>, total: u64) -> Self {
+        let main_thread = Python::attach(|py| {
+            let threading = py.import("threading").ok()?;
+            let main = threading.call_method0("main_thread").ok()?;
+            let current = threading.call_method0("current_thread").ok()?;
+            Some(main.is(&current))
+        })
+        .unwrap_or(true);
         Self {
             stop: AtomicBool::new(false),
             error: Mutex::new(None),
             progress,
             total,
             last: Mutex::new(None),
+            last_look: Mutex::new(None),
+            main_thread,
         }
     }
 
@@ -54,8 +71,15 @@ impl Watch {
     /// Called with the pulses simulated so far, after blocks were handed
     /// over, on the thread that called the run.
     fn tick(&self, done: u64) {
-        if self.stop.load(Ordering::SeqCst) {
+        if self.stop.load(Ordering::SeqCst) || (!self.main_thread && self.progress.is_none()) {
             return;
+        }
+        {
+            let mut last = self.last_look.lock().expect("look lock");
+            if last.is_some_and(|t| t.elapsed() < LOOK_EVERY) && done < self.total {
+                return;
+            }
+            *last = Some(Instant::now());
         }
         Python::attach(|py| {
             if let Err(e) = py.check_signals() {

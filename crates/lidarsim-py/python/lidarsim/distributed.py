@@ -26,6 +26,7 @@ parts given as arrays.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import shutil
 import sys
@@ -45,14 +46,36 @@ def _part_name(k: int, n: int) -> str:
     return f"part-{k:04d}-of-{n:04d}"
 
 
+#: The last survey a worker process built, by the TOML text it came from:
+#: a worker that runs several parts of one survey reads and indexes its
+#: scene once.
+_BUILT: Dict[str, Survey] = {}
+
+
+def _survey(spec: Tuple[str, tuple]) -> Survey:
+    """The survey of ``spec``, built once per worker process."""
+    text, data = spec
+    digest = hashlib.sha256(text.encode())
+    for method, args in data:
+        digest.update(method.encode())
+        for a in args:
+            digest.update(a.tobytes() if hasattr(a, "tobytes") else repr(a).encode())
+    key = digest.hexdigest()
+    survey = _BUILT.get(key)
+    if survey is None:
+        survey = Survey.from_toml(text)._with_data(data)
+        _BUILT.clear()
+        _BUILT[key] = survey
+    return survey
+
+
 def _run_part(
     spec: Tuple[str, tuple], k: int, n: int, shared: Optional[str], threads: int
 ) -> Dict[str, Any]:
     """A worker's task: part ``k`` of ``n`` of the survey ``spec`` (TOML
     text and array parts), into ``shared/part-K-of-N`` or, without a shared
     directory, into a temporary one whose files are returned."""
-    text, data = spec
-    survey = Survey.from_toml(text)._with_data(data)
+    survey = _survey(spec)
     if shared is not None:
         out = Path(shared) / _part_name(k, n)
         record = survey._core.run_part(os.fspath(out), k, n, threads, True)

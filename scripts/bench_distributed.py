@@ -1,0 +1,95 @@
+#!/usr/bin/env python3
+"""The terrain benchmark scene flown as several lines, run three ways:
+one process on 1 thread, one process on 2 threads, and split into parts on
+a 2-worker Dask LocalCluster (1 thread each) and merged. Prints the wall
+times (scene loading included), the cluster's speed-up over 1 thread and
+its overhead over the 2-thread run, and checks that the merged points.las
+is the unsplit one's bytes. Not part of the test suite (it measures time).
+
+    target/pyenv/bin/python scripts/bench_distributed.py [--lines 4] [--pulses-per-line 10000000]
+
+Needs the lidarsim package and distributed (scripts/check_python.sh
+installs both into target/pyenv) and target/release/lidarsim.
+"""
+
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+
+import lidarsim
+import lidarsim.distributed
+from distributed import Client, LocalCluster
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def timed(f):
+    t = time.perf_counter()
+    out = f()
+    return time.perf_counter() - t, out
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--lines", type=int, default=4)
+    ap.add_argument("--pulses-per-line", type=int, default=10_000_000)
+    ap.add_argument("--keep", action="store_true", help="keep the working directory")
+    a = ap.parse_args()
+    os.environ.setdefault("SOURCE_DATE_EPOCH", "1700000000")
+    work = Path(tempfile.mkdtemp(prefix="lidarsim-bench-dist-"))
+    binary = ROOT / "target" / "release" / "lidarsim"
+    subprocess.run(
+        [str(binary), "bench", "--export", str(work), "--scene", "terrain"],
+        check=True, capture_output=True,
+    )
+    text = (work / "terrain.toml").read_text()
+    # Parallel lines 360 m long across the 400 m scene, alternating in
+    # direction, each flown slowly enough to fire pulses-per-line pulses at
+    # the benchmark's 100 kHz over the scene.
+    length = 360.0
+    speed = length / (a.pulses_per_line / 100_000)
+    lines = ""
+    for i in range(a.lines):
+        x = -150.0 + 300.0 * i / max(a.lines - 1, 1)
+        y0, y1 = (-length / 2, length / 2) if i % 2 == 0 else (length / 2, -length / 2)
+        lines += (
+            f"[[flight_line]]\nstart_m = [{x}, {y0}, 500.0]\nend_m = [{x}, {y1}, 500.0]\n"
+            f"speed_mps = {speed}\n\n"
+        )
+    text = re.sub(r"\[\[flight_line\]\].*?speed_mps = 60.0\n", lines, text, flags=re.S)
+    (work / "lines.toml").write_text(text)
+    survey = lidarsim.Survey.load(work / "lines.toml")
+    pulses = a.lines * a.pulses_per_line
+    print(f"terrain scene, {a.lines} lines, {pulses} pulses")
+
+    one, _ = timed(lambda: lidarsim.Survey.load(work / "lines.toml").run_to(
+        work / "one", threads=1, progress=False))
+    two, _ = timed(lambda: lidarsim.Survey.load(work / "lines.toml").run_to(
+        work / "two", threads=2, progress=False))
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                           dashboard_address=None)
+    client = Client(cluster)
+    client.run(lambda: __import__("lidarsim"))
+    split, _ = timed(lambda: lidarsim.distributed.run(
+        survey, client, work / "split", parts=2, threads_per_part=1, progress=False))
+    client.close()
+    cluster.close()
+    same = (work / "one" / "points.las").read_bytes() == (work / "split" / "points.las").read_bytes()
+    print(f"1 process, 1 thread:      {one:7.2f} s  ({pulses / one:,.0f} pulses/s)")
+    print(f"1 process, 2 threads:     {two:7.2f} s  ({pulses / two:,.0f} pulses/s)")
+    print(f"2 workers x 1 thread:     {split:7.2f} s  ({pulses / split:,.0f} pulses/s), "
+          "parts and merge")
+    print(f"speed-up over 1 thread:   {one / split:.2f}")
+    print(f"overhead over 2 threads:  {100 * (split / two - 1):+.1f} %")
+    print(f"merged points.las is the unsplit run's: {same}")
+    if not a.keep:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    main()
