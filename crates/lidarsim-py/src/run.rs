@@ -188,10 +188,47 @@ pub fn run<'py>(
 }
 
 /// Options of a run into a directory, as the command line's.
+#[derive(Default)]
 pub struct DirOptions {
     pub overwrite: bool,
     pub resume: bool,
     pub no_space_check: bool,
+}
+
+/// Runs `job` with the GIL released under a [`Watch`] of `progress` over
+/// `total` pulses, handing it the run options of `threads` and `o`, and
+/// returns what it returns as Python data (a dict, as its JSON). An error
+/// of the watch (Ctrl-C, the callback's) comes first; the job's is an
+/// `OSError`. Callers check `threads` before loading the world.
+fn watched<'py, T, E>(
+    py: Python<'py>,
+    (threads, progress, total): (usize, Option<Py<PyAny>>, u64),
+    o: &DirOptions,
+    job: impl FnOnce(&RunOptions) -> Result<T, E> + Send,
+) -> PyResult<Bound<'py, PyAny>>
+where
+    T: serde::Serialize + Send,
+    E: std::fmt::Display + Send,
+{
+    let watch = Watch::new(progress, total);
+    let result = py.detach(|| {
+        let tick = |n| watch.tick(n);
+        let options = RunOptions {
+            stop: Some(&watch.stop),
+            resume: o.resume,
+            overwrite: o.overwrite,
+            no_space_check: o.no_space_check,
+            ..RunOptions::new(threads, &tick)
+        };
+        job(&options)
+    });
+    if let Some(e) = watch.take_error() {
+        return Err(e);
+    }
+    let value = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
+    let text = serde_json::to_string(&value)
+        .map_err(|e| PyValueError::new_err(format!("cannot write the result: {e}")))?;
+    json_to_py(py, &text)
 }
 
 /// Writes the same files as `lidarsim run` into `out_dir` and returns the
@@ -210,25 +247,9 @@ pub fn run_to<'py>(
     let world = core.world(py)?;
     let survey = &*core.survey;
     let total = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
-    let watch = Watch::new(progress, total);
-    let result = py.detach(|| {
-        let tick = |n| watch.tick(n);
-        let options = RunOptions {
-            stop: Some(&watch.stop),
-            resume: o.resume,
-            overwrite: o.overwrite,
-            no_space_check: o.no_space_check,
-            ..RunOptions::new(threads, &tick)
-        };
-        run_world_to_dir(survey, &world, out_dir, &options)
-    });
-    if let Some(e) = watch.take_error() {
-        return Err(e);
-    }
-    let summary = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
-    let text = serde_json::to_string(&summary)
-        .map_err(|e| PyValueError::new_err(format!("cannot write the summary: {e}")))?;
-    json_to_py(py, &text)
+    watched(py, (threads, progress, total), &o, |options| {
+        run_world_to_dir(survey, &world, out_dir, options)
+    })
 }
 
 /// Simulates part `k` of `n` of the survey into `out_dir` (points.part,
@@ -249,23 +270,13 @@ pub fn run_part<'py>(
     }
     let world = core.world(py)?;
     let survey = &*core.survey;
-    let watch = Watch::new(None, 0);
-    let result = py.detach(|| {
-        let tick = |n| watch.tick(n);
-        let options = RunOptions {
-            stop: Some(&watch.stop),
-            overwrite,
-            ..RunOptions::new(threads, &tick)
-        };
-        lidarsim::run::part::run_part(survey, &world, (k, n), out_dir, &options)
-    });
-    if let Some(e) = watch.take_error() {
-        return Err(e);
-    }
-    let record = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
-    let text = serde_json::to_string(&record)
-        .map_err(|e| PyValueError::new_err(format!("cannot write the record: {e}")))?;
-    json_to_py(py, &text)
+    let o = DirOptions {
+        overwrite,
+        ..DirOptions::default()
+    };
+    watched(py, (threads, None, 0), &o, |options| {
+        lidarsim::run::part::run_part(survey, &world, (k, n), out_dir, options)
+    })
 }
 
 /// Merges the parts in `part_dirs` into `out_dir` and returns the summary.
@@ -277,21 +288,11 @@ pub fn merge<'py>(
     overwrite: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     check_threads(threads)?;
-    let watch = Watch::new(None, 0);
-    let result = py.detach(|| {
-        let tick = |n| watch.tick(n);
-        let options = RunOptions {
-            stop: Some(&watch.stop),
-            overwrite,
-            ..RunOptions::new(threads, &tick)
-        };
-        lidarsim::run::part::merge(&part_dirs, out_dir, &options)
-    });
-    if let Some(e) = watch.take_error() {
-        return Err(e);
-    }
-    let summary = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
-    let text = serde_json::to_string(&summary)
-        .map_err(|e| PyValueError::new_err(format!("cannot write the summary: {e}")))?;
-    json_to_py(py, &text)
+    let o = DirOptions {
+        overwrite,
+        ..DirOptions::default()
+    };
+    watched(py, (threads, None, 0), &o, |options| {
+        lidarsim::run::part::merge(&part_dirs, out_dir, options)
+    })
 }
