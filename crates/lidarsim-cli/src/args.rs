@@ -99,7 +99,9 @@ pub struct RunArgs {
     pub resume: Option<PathBuf>,
     /// Simulate only part K of N (K from 1): whole flight lines where
     /// there are enough, otherwise equal shares of the pulses, into the
-    /// output directory as points.part and part.json for `lidarsim merge`.
+    /// output directory with part.json for `lidarsim merge`: its points as
+    /// points.las and report.state when a plain LAS file is the survey's
+    /// only point output, else as points.part.
     #[arg(long, value_name = "K/N", conflicts_with = "resume", value_parser = part_parser)]
     pub part: Option<(usize, usize)>,
 }

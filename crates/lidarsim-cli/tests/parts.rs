@@ -185,6 +185,123 @@ fn merged_parts_are_the_unsplit_run_byte_for_byte() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The images of a report (maps, profile, waveforms, patterns), as their
+/// `data:` URIs, in order.
+fn images(report: &Path) -> Vec<String> {
+    let page = std::fs::read_to_string(report).unwrap();
+    page.split("data:image/")
+        .skip(1)
+        .map(|rest| rest.split('"').next().unwrap().to_string())
+        .collect()
+}
+
+/// A survey whose only point output is a plain LAS file has parts that
+/// write it as the unsplit run encodes it, with what their reports
+/// gathered, and a merge that copies their records: the same bytes, the
+/// same summary and the same report pictures; a stitched part's file cut,
+/// or changed in its header, or a report state replaced, is refused.
+#[test]
+fn stitched_las_parts_are_the_unsplit_run_byte_for_byte() {
+    let dir = temp("parts-stitched");
+    let survey = dir.join("survey.toml");
+    let las_only = SURVEY.replace(
+        r#"formats = ["las-waveform", "laz", "ply", "xyz"]"#,
+        r#"formats = ["las"]"#,
+    );
+    std::fs::write(&survey, &las_only).unwrap();
+    let whole = dir.join("whole");
+    ok(&lidarsim(&["run", s(&survey), "-o", s(&whole)]));
+    for (n, order) in [
+        (1, vec![1]),
+        (2, vec![1, 2]),
+        (3, vec![2, 3, 1]),
+        (7, vec![7, 1, 4, 2, 6, 3, 5]),
+    ] {
+        let parts = run_parts(&dir, &survey, n, &order);
+        for p in &parts {
+            assert!(p.join("points.las").exists() && p.join("report.state").exists());
+            assert!(!p.join("points.part").exists());
+        }
+        let merged = dir.join(format!("merged-{n}"));
+        let mut args = vec!["merge", "-o", s(&merged)];
+        args.extend(parts.iter().map(|p| s(p)));
+        ok(&lidarsim(&args));
+        for f in [
+            "points.las",
+            "survey.toml",
+            "trajectory.csv",
+            "trajectory_true.csv",
+            "trajectory_observed.csv",
+        ] {
+            assert!(
+                std::fs::read(whole.join(f)).unwrap() == std::fs::read(merged.join(f)).unwrap(),
+                "{n} parts: {f} differs"
+            );
+        }
+        assert_eq!(summary(&whole), summary(&merged), "{n} parts: summary.json");
+        let pictures = images(&whole.join("report.html"));
+        assert!(pictures.len() >= 4, "{}", pictures.len());
+        assert!(
+            pictures == images(&merged.join("report.html")),
+            "{n} parts: the report's pictures differ"
+        );
+    }
+    let parts = run_parts(&dir, &survey, 2, &[1, 2]);
+    let merge = || {
+        let out = dir.join("refused");
+        let o = lidarsim(&[
+            "merge",
+            "--overwrite",
+            "-o",
+            s(&out),
+            s(&parts[0]),
+            s(&parts[1]),
+        ]);
+        assert!(!o.status.success());
+        let e = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(!e.contains("panicked"), "{e}");
+        assert!(!out.join("points.las").exists() && !out.join("summary.json").exists());
+        e
+    };
+    let las = parts[1].join("points.las");
+    let bytes = std::fs::read(&las).unwrap();
+    std::fs::write(&las, &bytes[..bytes.len() - 30]).unwrap();
+    let e = merge();
+    assert!(
+        e.contains("points.las") && e.contains("cut short or changed"),
+        "{e}"
+    );
+    // Another coordinate scale in its header (LAS 1.4 R15 Table 3: the x
+    // scale factor at byte 131).
+    let mut edited = bytes.clone();
+    edited[131..139].copy_from_slice(&0.01f64.to_le_bytes());
+    std::fs::write(&las, &edited).unwrap();
+    let e = merge();
+    assert!(e.contains("scale or offset differ"), "{e}");
+    std::fs::write(&las, &bytes).unwrap();
+    let state = parts[0].join("report.state");
+    let saved = std::fs::read(&state).unwrap();
+    let mut garbled = saved.clone();
+    garbled[..8].copy_from_slice(b"NOTSTATE");
+    std::fs::write(&state, &garbled).unwrap();
+    let e = merge();
+    assert!(
+        e.contains("report.state") && e.contains("not a report state"),
+        "{e}"
+    );
+    std::fs::write(&state, &saved).unwrap();
+    let out = dir.join("refused");
+    ok(&lidarsim(&[
+        "merge",
+        "--overwrite",
+        "-o",
+        s(&out),
+        s(&parts[1]),
+        s(&parts[0]),
+    ]));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Every file under `dir`, relative to it, sorted.
 fn tree(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();

@@ -252,7 +252,7 @@ pub fn run_to<'py>(
     })
 }
 
-/// Simulates part `k` of `n` of the survey into `out_dir` (points.part,
+/// Simulates part `k` of `n` of the survey into `out_dir` (its points,
 /// part.json, survey.toml) and returns its record as a dict.
 pub fn run_part<'py>(
     py: Python<'py>,

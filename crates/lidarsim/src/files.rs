@@ -341,20 +341,38 @@ pub fn trajectory_rows(
     rows
 }
 
-/// Writes [`trajectory_rows`] as CSV: time, position, attitude in degrees,
-/// line number.
+/// Writes the trajectory (observed or flown, as [`trajectory_rows`]) as CSV
+/// into each of `paths` (the same bytes in each, formatted once). Each file
+/// is written under a temporary name and renamed when complete; an error
+/// names the file.
 pub fn write_trajectory(
     survey: &Survey,
     lines: &[FlightLine],
-    path: &Path,
+    paths: &[&Path],
     observed: bool,
 ) -> io::Result<()> {
-    let mut f = AtomicFile::create(path)?;
-    let w = f.writer();
-    writeln!(w, "gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line")?;
+    let mut files = paths
+        .iter()
+        .map(|p| AtomicFile::create(p))
+        .collect::<io::Result<Vec<_>>>()?;
+    let mut row = String::with_capacity(128);
+    let write_all = |files: &mut [AtomicFile], row: &str| -> io::Result<()> {
+        for f in files.iter_mut() {
+            f.writer()
+                .write_all(row.as_bytes())
+                .map_err(|e| f.error(e))?;
+        }
+        Ok(())
+    };
+    write_all(
+        &mut files,
+        "gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line\n",
+    )?;
     for r in trajectory_rows(survey, lines, observed) {
+        use std::fmt::Write as _;
+        row.clear();
         writeln!(
-            w,
+            row,
             "{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}",
             r.gps_time_s,
             r.position_m.x,
@@ -364,7 +382,12 @@ pub fn write_trajectory(
             r.attitude_deg[1],
             r.attitude_deg[2],
             r.line
-        )?;
+        )
+        .expect("formatting into a String");
+        write_all(&mut files, &row)?;
     }
-    f.commit()
+    for f in files {
+        f.commit()?;
+    }
+    Ok(())
 }

@@ -140,6 +140,19 @@ pub trait PointSink: Send {
         let _ = waveforms;
         self.write(points)
     }
+    /// Appends the points of `file`, a finished file this kind of sink
+    /// wrote with the same settings (a part of a split run), as they are,
+    /// and returns how many it held. Sinks that cannot keep the default,
+    /// an `Unsupported` error.
+    fn append_file(&mut self, file: &std::path::Path) -> io::Result<u64> {
+        Err(file_error(
+            file,
+            io::Error::new(
+                io::ErrorKind::Unsupported,
+                "this output cannot take a finished file's points as they are",
+            ),
+        ))
+    }
     /// Completes the output (headers, renaming).
     fn finish(self: Box<Self>) -> io::Result<()>;
     /// Completes the output for the points written so far but leaves it

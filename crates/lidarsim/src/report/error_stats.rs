@@ -33,6 +33,17 @@ impl ErrorStats {
         self.max_vertical_m = self.max_vertical_m.max(e.z.abs());
     }
 
+    /// Counts the points `later` counted, as if they had followed.
+    pub fn absorb(&mut self, later: &ErrorStats) {
+        self.count += later.count;
+        for k in 0..3 {
+            self.sum_m[k] += later.sum_m[k];
+            self.sum_sq_m2[k] += later.sum_sq_m2[k];
+        }
+        self.max_horizontal_m = self.max_horizontal_m.max(later.max_horizontal_m);
+        self.max_vertical_m = self.max_vertical_m.max(later.max_vertical_m);
+    }
+
     /// Mean error vector (x, y, z), m.
     pub fn mean_m(&self) -> [f64; 3] {
         let n = self.count.max(1) as f64;

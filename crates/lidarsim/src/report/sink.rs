@@ -104,6 +104,70 @@ impl ReportSink {
     }
 }
 
+impl ReportSink {
+    /// A sink over the same grid that has seen no point.
+    pub fn empty_like(&self) -> Self {
+        let n = self.count.len();
+        Self {
+            top_z: vec![f32::NEG_INFINITY; n],
+            top_intensity: vec![0; n],
+            top_class: vec![0; n],
+            count: vec![0; n],
+            returns_per_pulse: [0; 16],
+            profile: Vec::new(),
+            richest_pulse: None,
+            single_pulse: None,
+            errors: ErrorStats::default(),
+            ..*self
+        }
+    }
+
+    /// Takes in what `later` gathered from the points that follow this
+    /// sink's (the next part of a split run): afterwards the sink holds
+    /// what it would hold had it seen all the points itself — the same
+    /// pixels, histogram, cross-section and sample pulses, and the error
+    /// statistics up to the order of their sums. Refused when `later`
+    /// covers another grid.
+    pub fn absorb(&mut self, later: &ReportSink) -> io::Result<()> {
+        if (later.width, later.height) != (self.width, self.height)
+            || [later.x0, later.y0, later.resolution_m, later.profile_y]
+                != [self.x0, self.y0, self.resolution_m, self.profile_y]
+        {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidData,
+                "bad report state: it was made for another area",
+            ));
+        }
+        for k in 0..self.count.len() {
+            self.count[k] += later.count[k];
+            // A later point replaces the highest only when strictly higher.
+            if later.top_z[k] > self.top_z[k] {
+                self.top_z[k] = later.top_z[k];
+                self.top_intensity[k] = later.top_intensity[k];
+                self.top_class[k] = later.top_class[k];
+            }
+        }
+        for (a, b) in self
+            .returns_per_pulse
+            .iter_mut()
+            .zip(later.returns_per_pulse)
+        {
+            *a += b;
+        }
+        let room = MAX_PROFILE_POINTS - self.profile.len().min(MAX_PROFILE_POINTS);
+        self.profile
+            .extend(later.profile.iter().take(room).cloned());
+        if let Some(r) = later.richest_pulse
+            && self.richest_pulse.is_none_or(|s| r.2 > s.2)
+        {
+            self.richest_pulse = Some(r);
+        }
+        self.single_pulse = self.single_pulse.or(later.single_pulse);
+        self.errors.absorb(&later.errors);
+        Ok(())
+    }
+}
+
 impl PointSink for ReportSink {
     fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
         for p in points {
@@ -177,5 +241,53 @@ mod tests {
         sink.write(&three).unwrap();
         assert_eq!(sink.richest_pulse, Some((1, 7, 3)));
         assert_eq!(sink.single_pulse, Some((0, 0)));
+    }
+
+    /// Points with ties in height, several pulses of one to four returns,
+    /// some in the cross-section band, and errors in quarter metres so
+    /// that their sums are exact in any order.
+    fn points(n: u64) -> Vec<PointRecord> {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |m: u64| {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 33) % m
+        };
+        let mut out = Vec::new();
+        for pulse in 0..n {
+            let of = 1 + next(4) as u8;
+            let (x, y) = (next(40) as f64 * 0.25, 4.0 + next(8) as f64 * 0.25);
+            let line = (pulse / 50) as u16;
+            for r in 1..=of {
+                let z = next(6) as f64 * 0.5;
+                let e = DVec3::new(next(5) as f64 * 0.25, 0.0, -(next(3) as f64) * 0.25);
+                let mut p = rec((x, y, z), e, (r, of), (line, pulse));
+                p.intensity = next(1000) as u16;
+                p.classification = next(3) as u8;
+                out.push(p);
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn absorbing_the_next_points_sink_is_seeing_them_all() {
+        let all = points(400);
+        let mut whole = ReportSink::new(area(10.0, 10.0), 4.0);
+        whole.write(&all).unwrap();
+        for cuts in [vec![0, all.len()], vec![17, 300, 301], vec![1, 2, 900]] {
+            let mut merged = ReportSink::new(area(10.0, 10.0), 4.0);
+            let mut from = 0;
+            for cut in cuts.into_iter().chain([all.len()]) {
+                let mut part = merged.empty_like();
+                part.write(&all[from..cut]).unwrap();
+                merged.absorb(&part).unwrap();
+                from = cut;
+            }
+            assert_eq!(merged, whole);
+        }
+        let other = ReportSink::new(area(12.0, 10.0), 4.0);
+        assert!(whole.absorb(&other).is_err());
     }
 }

@@ -274,6 +274,45 @@ pub(crate) fn execute(
     options: &RunOptions<'_>,
     source: Source<'_>,
 ) -> Result<Summary, RunError> {
+    std::thread::scope(|scope| execute_in(scope, survey, world, out_dir, options, source))
+}
+
+/// The trajectory files, by name, and whether each is the observed one.
+const TRAJECTORY_FILES: [(&str, bool); 3] = [
+    ("trajectory.csv", false),
+    ("trajectory_true.csv", false),
+    ("trajectory_observed.csv", true),
+];
+
+/// Writes the trajectory flown (`trajectory.csv`, kept under its first
+/// name, and `trajectory_true.csv`, formatted once for both) and the one
+/// the GNSS/IMU measured into `out_dir`.
+fn write_trajectories(survey: &Survey, world: &World, out_dir: &Path) -> Result<(), RunError> {
+    for observed in [false, true] {
+        let paths: Vec<PathBuf> = TRAJECTORY_FILES
+            .iter()
+            .filter(|(_, o)| *o == observed)
+            .map(|(name, _)| out_dir.join(name))
+            .collect();
+        let refs: Vec<&Path> = paths.iter().map(PathBuf::as_path).collect();
+        write_trajectory(survey, &world.lines, &refs, observed).map_err(|source| RunError {
+            path: paths[0].clone(),
+            source,
+        })?;
+    }
+    Ok(())
+}
+
+/// [`execute`] within `scope`, where a merge writes the trajectories while
+/// it joins the parts' points.
+fn execute_in<'scope>(
+    scope: &'scope std::thread::Scope<'scope, '_>,
+    survey: &'scope Survey,
+    world: &'scope World,
+    out_dir: &'scope Path,
+    options: &RunOptions<'_>,
+    source: Source<'_>,
+) -> Result<Summary, RunError> {
     let io_err = |path: &Path| {
         let path = path.to_path_buf();
         move |source| RunError { path, source }
@@ -360,19 +399,21 @@ pub(crate) fn execute(
     files.extend(data_files(survey).into_iter().map(|d| d.path));
     files.push("survey.toml".to_string());
 
-    // The trajectory flown (trajectory.csv, kept under its first name, and
-    // trajectory_true.csv) and the one the GNSS/IMU measured.
-    for (name, observed) in [
-        ("trajectory.csv", false),
-        ("trajectory_true.csv", false),
-        ("trajectory_observed.csv", true),
-    ] {
-        let path = out_dir.join(name);
-        if prev.is_none() {
-            write_trajectory(survey, &world.lines, &path, observed).map_err(io_err(&path))?;
+    // The trajectories (a resumed run has them already); a merge writes
+    // them on a thread of their own while it joins the parts' points.
+    let mut trajectories = None;
+    if prev.is_none() {
+        if matches!(source, Source::Parts(_)) {
+            trajectories = Some(scope.spawn(|| write_trajectories(survey, world, out_dir)));
+        } else {
+            write_trajectories(survey, world, out_dir)?;
         }
-        files.push(name.to_string());
     }
+    let mut trajectories_written = move || match trajectories.take() {
+        Some(t) => t.join().expect("the trajectory writer does not panic"),
+        None => Ok(()),
+    };
+    files.extend(TRAJECTORY_FILES.iter().map(|(name, _)| name.to_string()));
 
     let mut report = ReportSink::new(covered_area(world, &plan), plan.point_density_per_m2);
     let mut before = RunCounts::default();
@@ -388,7 +429,6 @@ pub(crate) fn execute(
     let timer = Timer::start();
     let mut refs: Vec<&mut (dyn PointSink + 'static)> =
         sinks.iter_mut().map(|b| b.as_mut()).collect();
-    refs.push(&mut report);
     let done_before = before.pulse_slots;
     let progress = |n: u64| (options.progress)(done_before + n);
     let control = RunControl {
@@ -398,16 +438,18 @@ pub(crate) fn execute(
         only: None,
     };
     let (result, wall_parts) = match source {
-        Source::Simulate => (
-            sim.run_from(options.threads, &mut refs, &progress, &control),
-            None,
-        ),
+        Source::Simulate => {
+            refs.push(&mut report);
+            (
+                sim.run_from(options.threads, &mut refs, &progress, &control),
+                None,
+            )
+        }
         Source::Parts(parts) => (
-            part::replay(parts, &mut refs, &progress),
+            part::gather(parts, refs, &mut report, &progress),
             Some(parts.iter().map(|p| p.wall_time_s).sum::<f64>()),
         ),
     };
-    drop(refs);
     let outcome = match result {
         Ok(o) => o,
         Err(e) => {
@@ -455,6 +497,7 @@ pub(crate) fn execute(
             files,
             &scene_warnings,
         );
+        trajectories_written()?;
         summary.complete = false;
         summary.next_pulse = Some(next);
         summary.resume = Some(record);
@@ -499,6 +542,7 @@ pub(crate) fn execute(
         .map_err(io_err(&report_path))?;
     write_atomic(&report_path, page.as_bytes()).map_err(io_err(&report_path))?;
 
+    trajectories_written()?;
     let json = serde_json::to_vec_pretty(&summary).map_err(|e| io_err(&summary_path)(e.into()))?;
     write_atomic(&summary_path, &json).map_err(io_err(&summary_path))?;
     match std::fs::remove_file(&state_path) {
@@ -528,7 +572,7 @@ pub(crate) fn write_survey(survey: &Survey, out_dir: &Path) -> Result<String, Ru
 
 /// The part of the scene the flight lines can see: each line's bounding box
 /// widened by half its swath and 10 m, within the scene's bounds (x, y).
-fn covered_area(world: &World, plan: &Plan) -> crate::geometry::Aabb {
+pub(crate) fn covered_area(world: &World, plan: &Plan) -> crate::geometry::Aabb {
     use crate::geometry::{Aabb, DVec3};
     let scene = world.scene().bounds();
     let mut area = Aabb::EMPTY;

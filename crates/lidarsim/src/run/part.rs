@@ -1,10 +1,18 @@
 //! Runs split into parts and their merge: part `K` of `N` simulates its
 //! stretch of the survey's pulses ([`crate::sim::parts`]) into a directory
-//! of its own — the survey as run, the points kept whole
-//! ([`crate::output::part`]) and a record of what it did (`part.json`) —
-//! and [`merge`] hands the parts' points, in order, to the writers an
-//! unsplit run uses, so that the merged directory holds the files of the
-//! unsplit run byte for byte (the timings of `summary.json` apart).
+//! of its own — the survey as run, its points and a record of what it did
+//! (`part.json`) — and [`merge`] joins the parts' points, in order, in the
+//! writers an unsplit run uses, so that the merged directory holds the
+//! files of the unsplit run byte for byte (the timings of `summary.json`
+//! apart).
+//!
+//! A survey whose only point output is one plain LAS file ([`stitched`])
+//! has each part write its points as that LAS file (`points.las`, encoded
+//! with the unsplit run's settings) and what its report gathered
+//! (`report.state`): the merge copies the records as they are and joins
+//! the reports, so its cost is that of copying bytes. Any other survey's
+//! parts keep their points whole, every field ([`crate::output::part`]),
+//! and the merge hands them to the writers again.
 //!
 //! A merge refuses parts that do not make one run: a directory that is not
 //! a part, a part that did not finish, a point file cut short or changed,
@@ -19,14 +27,19 @@ use serde::{Deserialize, Serialize};
 use super::resume::fnv1a_hex;
 use super::{RunError, RunOptions, Source, Summary, execute, outdir, write_survey};
 use crate::output::part::{PartReader, PartWriter};
-use crate::output::{PointRecord, PointSink, WaveformBlock, write_atomic};
+use crate::output::{LasWriter, PointRecord, PointSink, WaveformBlock, file_error, write_atomic};
+use crate::report::ReportSink;
 use crate::sim::parts::{PulseRange, split};
 use crate::sim::{RunControl, RunCounts, RunOutcome, Simulator, Timer};
 use crate::survey::Survey;
 use crate::world::World;
 
-/// A part's point file.
+/// A part's point file, every field of every point (when not
+/// [`stitched`]).
 pub const PART_POINTS: &str = "points.part";
+/// A stitched part's point file: its records as the unsplit run's LAS
+/// file holds them.
+pub const PART_LAS: &str = "points.las";
 /// A part's record.
 pub const PART_RECORD: &str = "part.json";
 
@@ -57,8 +70,14 @@ pub struct PartRecord {
     pub pulses_with_echo: u64,
     /// Points by return number (first, second, …).
     pub points_by_return: Vec<u64>,
+    /// The point file: [`PART_POINTS`], or [`PART_LAS`] when the survey's
+    /// parts are [`stitched`].
+    pub points_file: String,
     /// Bytes of the point file.
     pub points_bytes: u64,
+    /// Bytes of the report's state (`report.state`) of a stitched part; 0
+    /// for none.
+    pub report_bytes: u64,
     /// Threads it ran on.
     pub threads: usize,
     /// Wall-clock time of its simulation, s.
@@ -87,6 +106,8 @@ impl PartRecord {
 pub struct PartInput {
     /// The part's point file.
     pub points: PathBuf,
+    /// What its report gathered, when the part is stitched.
+    pub report: Option<PathBuf>,
     /// What the part recorded.
     pub counts: RunCounts,
     /// Its simulation time, s.
@@ -100,6 +121,19 @@ fn error(path: &Path, kind: io::ErrorKind, message: String) -> RunError {
     }
 }
 
+/// Whether the parts of `survey` write their points as the LAS file of the
+/// unsplit run, for a merge that copies them: true when that file, plain
+/// and without waveforms, is the survey's only point output.
+pub fn stitched(survey: &Survey) -> bool {
+    let f = &survey.output.formats;
+    f.las
+        && !f.las_waveform
+        && !f.laz
+        && !f.ply
+        && !f.xyz
+        && survey.output.layout == crate::survey::Layout::Single
+}
+
 /// The pulses of part `k` of `n` of `survey` over `world`'s lines.
 pub fn part_ranges(survey: &Survey, world: &World, k: usize, n: usize) -> Vec<PulseRange> {
     let pulses: Vec<u64> = world.lines.iter().map(|l| survey.pulses_of(l)).collect();
@@ -107,8 +141,9 @@ pub fn part_ranges(survey: &Survey, world: &World, k: usize, n: usize) -> Vec<Pu
 }
 
 /// Simulates part `k` of `n` (`1 ≤ k ≤ n`) of `survey` into `out_dir`:
-/// `survey.toml` (with the files of scene entries given as data),
-/// `points.part` and `part.json`. A part stopped early (`options.stop`)
+/// `survey.toml` (with the files of scene entries given as data), the
+/// points (`points.part`, or `points.las` and `report.state` when
+/// [`stitched`]) and `part.json`. A part stopped early (`options.stop`)
 /// leaves no point file and a record with `"complete": false`; the run
 /// options' resume and pulse budget do not apply to parts.
 pub fn run_part(
@@ -130,12 +165,23 @@ pub fn run_part(
     let text = write_survey(survey, out_dir)?;
     let ranges = part_ranges(survey, world, k, n);
     let sim = Simulator::new(survey, world).with_waveforms(survey.output.formats.las_waveform);
-    let points_path = out_dir.join(PART_POINTS);
+    let stitch = stitched(survey);
+    let points_file = if stitch { PART_LAS } else { PART_POINTS };
+    let points_path = out_dir.join(points_file);
     let named = |path: &Path| {
         let path = path.to_path_buf();
         move |source| RunError { path, source }
     };
-    let mut sink = Box::new(PartWriter::create(&points_path).map_err(named(&points_path))?);
+    let mut sink: Box<dyn PointSink> = if stitch {
+        let settings = crate::files::las_settings(survey, world);
+        Box::new(LasWriter::create(&points_path, settings).map_err(named(&points_path))?)
+    } else {
+        Box::new(PartWriter::create(&points_path).map_err(named(&points_path))?)
+    };
+    let mut report = stitch.then(|| {
+        let plan = crate::plan::plan(survey, world);
+        ReportSink::new(super::covered_area(world, &plan), plan.point_density_per_m2)
+    });
     let control = RunControl {
         stop: options.stop,
         only: Some(&ranges),
@@ -143,7 +189,10 @@ pub fn run_part(
     };
     let timer = Timer::start();
     let outcome = {
-        let mut sinks: [&mut (dyn PointSink + 'static); 1] = [sink.as_mut()];
+        let mut sinks: Vec<&mut (dyn PointSink + 'static)> = vec![sink.as_mut()];
+        if let Some(r) = report.as_mut() {
+            sinks.push(r);
+        }
         sim.run_from(options.threads, &mut sinks, options.progress, &control)
     };
     let wall_time_s = timer.seconds();
@@ -157,15 +206,22 @@ pub fn run_part(
             return Err(super::run_error(out_dir, e));
         }
     };
-    let points_bytes = if complete {
+    let (mut points_bytes, mut report_bytes) = (0, 0);
+    if complete {
         sink.finish().map_err(|e| super::run_error(out_dir, e))?;
-        std::fs::metadata(&points_path)
+        points_bytes = std::fs::metadata(&points_path)
             .map_err(named(&points_path))?
-            .len()
+            .len();
+        if let Some(r) = &report {
+            let path = out_dir.join(super::REPORT_STATE);
+            let mut state = Vec::new();
+            r.save(&mut state).map_err(named(&path))?;
+            write_atomic(&path, &state).map_err(named(&path))?;
+            report_bytes = state.len() as u64;
+        }
     } else {
         drop(sink);
-        0
-    };
+    }
     let c = outcome.counts;
     let last = c
         .points_by_return
@@ -185,7 +241,9 @@ pub fn run_part(
         points: c.points,
         pulses_with_echo: c.pulses_with_echo,
         points_by_return: c.points_by_return[..last].to_vec(),
+        points_file: points_file.to_string(),
         points_bytes,
+        report_bytes,
         threads: options.threads,
         wall_time_s,
     };
@@ -241,25 +299,41 @@ fn read_part(dir: &Path) -> Result<(PartRecord, String), RunError> {
             "was changed after the part ran (its hash is not the one the part recorded)".into(),
         ));
     }
-    let points = dir.join(PART_POINTS);
-    let len = std::fs::metadata(&points)
-        .map_err(|e| {
-            error(
-                &points,
-                e.kind(),
-                format!("cannot read the part's points: {e}"),
-            )
-        })?
-        .len();
-    if len != record.points_bytes {
+    if ![PART_POINTS, PART_LAS].contains(&record.points_file.as_str()) {
         return Err(error(
-            &points,
+            &path,
             io::ErrorKind::InvalidData,
             format!(
-                "holds {len} bytes, but part {}/{} wrote {}: it was cut short or changed",
-                record.part, record.parts, record.points_bytes
+                "names its points {:?}, which is neither {PART_POINTS} nor {PART_LAS}",
+                record.points_file
             ),
         ));
+    }
+    let mut files = vec![(record.points_file.as_str(), record.points_bytes)];
+    if record.report_bytes > 0 {
+        files.push((super::REPORT_STATE, record.report_bytes));
+    }
+    for (name, bytes) in files {
+        let file = dir.join(name);
+        let len = std::fs::metadata(&file)
+            .map_err(|e| {
+                error(
+                    &file,
+                    e.kind(),
+                    format!("cannot read the part's {name}: {e}"),
+                )
+            })?
+            .len();
+        if len != bytes {
+            return Err(error(
+                &file,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "holds {len} bytes, but part {}/{} wrote {bytes}: it was cut short or changed",
+                    record.part, record.parts
+                ),
+            ));
+        }
     }
     Ok((record, text))
 }
@@ -371,10 +445,30 @@ pub fn merge(
             ));
         }
     }
+    let (points_file, with_report) = if stitched(&survey) {
+        (PART_LAS, true)
+    } else {
+        (PART_POINTS, false)
+    };
+    for (dir, r) in &parts {
+        if r.points_file != points_file || (r.report_bytes > 0) != with_report {
+            return Err(error(
+                dir,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "part {}/{n} holds {}, but the parts of its survey hold {points_file}{}",
+                    r.part,
+                    r.points_file,
+                    if with_report { " and report.state" } else { "" }
+                ),
+            ));
+        }
+    }
     let inputs: Vec<PartInput> = parts
         .iter()
         .map(|(dir, r)| PartInput {
-            points: dir.join(PART_POINTS),
+            points: dir.join(&r.points_file),
+            report: with_report.then(|| dir.join(super::REPORT_STATE)),
             counts: r.counts(),
             wall_time_s: r.wall_time_s,
         })
@@ -382,10 +476,74 @@ pub fn merge(
     execute(&survey, &world, out_dir, options, Source::Parts(&inputs))
 }
 
+/// Joins the points of `parts`, in order, in `sinks` and `report`:
+/// stitched parts' files are appended as they are ([`stitch`]), other
+/// parts' points are handed to the writers ([`replay`]).
+pub(crate) fn gather<'a>(
+    parts: &[PartInput],
+    mut sinks: Vec<&'a mut (dyn PointSink + 'static)>,
+    report: &'a mut ReportSink,
+    progress: &(dyn Fn(u64) + Sync),
+) -> io::Result<RunOutcome> {
+    if !parts.is_empty() && parts.iter().all(|p| p.report.is_some()) {
+        stitch(parts, &mut sinks, report, progress)
+    } else {
+        sinks.push(report);
+        replay(parts, &mut sinks, progress)
+    }
+}
+
+/// Appends each stitched part's point file to `sinks` as it is and joins
+/// what its report gathered to `report`; progress in pulse slots after
+/// each part. The counts are the parts' records, checked against the
+/// points appended.
+fn stitch(
+    parts: &[PartInput],
+    sinks: &mut [&mut (dyn PointSink + 'static)],
+    report: &mut ReportSink,
+    progress: &(dyn Fn(u64) + Sync),
+) -> io::Result<RunOutcome> {
+    let mut counts = RunCounts::default();
+    for part in parts {
+        for sink in sinks.iter_mut() {
+            let n = sink.append_file(&part.points)?;
+            if n != part.counts.points {
+                return Err(miscounted(&part.points, n, part.counts.points));
+            }
+        }
+        if let Some(path) = &part.report {
+            let state = std::fs::read(path).map_err(|e| file_error(path, e))?;
+            let mut later = report.empty_like();
+            later
+                .restore(&state)
+                .and_then(|()| report.absorb(&later))
+                .map_err(|e| file_error(path, e))?;
+        }
+        counts.add(&part.counts);
+        progress(counts.pulse_slots);
+    }
+    Ok(RunOutcome {
+        counts,
+        stopped_at: None,
+    })
+}
+
+/// A part's point file that holds another number of points than its
+/// record.
+fn miscounted(path: &Path, held: u64, recorded: u64) -> io::Error {
+    file_error(
+        path,
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!("holds {held} points, but its part recorded {recorded}"),
+        ),
+    )
+}
+
 /// Hands the points of `parts`, in order, to `sinks`; progress in pulse
 /// slots after each block. The counts are the parts' records, checked
 /// against the points read.
-pub(crate) fn replay(
+fn replay(
     parts: &[PartInput],
     sinks: &mut [&mut (dyn PointSink + 'static)],
     progress: &(dyn Fn(u64) + Sync),
@@ -402,16 +560,7 @@ pub(crate) fn replay(
             read += points.len() as u64;
         }
         if read != part.counts.points {
-            return Err(crate::output::file_error(
-                &part.points,
-                io::Error::new(
-                    io::ErrorKind::InvalidData,
-                    format!(
-                        "holds {read} points, but its part recorded {}",
-                        part.counts.points
-                    ),
-                ),
-            ));
+            return Err(miscounted(&part.points, read, part.counts.points));
         }
         counts.add(&part.counts);
         progress(counts.pulse_slots);

@@ -13,6 +13,7 @@
 //! describes the items, and bit 7 of the point data format byte marks the
 //! file as compressed.
 
+mod tally;
 mod vlr;
 mod wdp;
 
@@ -254,6 +255,11 @@ impl LasWriter {
         len: u64,
         wdp_len: Option<u64>,
     ) -> io::Result<Self> {
+        // The file as the interrupted run finished it, or as a failed
+        // resume left it.
+        let partial = AtomicFile::partial_of(path);
+        let t = tally::read(&partial, path, &settings, "continue")?;
+        settings.creation_day_year = t.creation_day_year;
         let bad = |what: String| {
             file_error(
                 path,
@@ -263,80 +269,23 @@ impl LasWriter {
                 ),
             )
         };
-        let mut h = [0u8; HEADER_SIZE as usize];
-        // The file as the interrupted run finished it, or as a failed
-        // resume left it.
-        let partial = AtomicFile::partial_of(path);
-        std::fs::File::open(&partial)
-            .and_then(|mut f| io::Read::read_exact(&mut f, &mut h))
-            .map_err(|e| file_error(&partial, e))?;
-        let u16_at = |o: usize| u16::from_le_bytes([h[o], h[o + 1]]);
-        let u32_at = |o: usize| u32::from_le_bytes([h[o], h[o + 1], h[o + 2], h[o + 3]]);
-        let u64_at = |o: usize| {
-            let mut b = [0u8; 8];
-            b.copy_from_slice(&h[o..o + 8]);
-            u64::from_le_bytes(b)
-        };
-        let f64_at = |o: usize| f64::from_bits(u64_at(o));
-        if settings.compressed {
-            return Err(bad(
-                "LAZ files cannot be continued; run the survey again".into()
-            ));
+        if t.file_len(&settings) != Some(len) {
+            return Err(bad(format!(
+                "its header counts {} points but {len} bytes were recorded",
+                t.count
+            )));
         }
-        let format = if settings.waveform.is_some() { 9 } else { 6 };
-        if &h[0..4] != b"LASF" || h[24..26] != [1, 4] || h[104] != format {
-            return Err(bad(format!("not a LAS 1.4 file of point format {format}")));
-        }
-        settings.creation_day_year = (u16_at(90), u16_at(92));
         let mut w = Self {
             file: AtomicFile::unopened(path),
             settings,
             body: Body::Plain,
             wdp: None,
-            count: u64_at(247),
-            by_return: [0; 15],
-            min: [i32::MAX; 3],
-            max: [i32::MIN; 3],
+            count: t.count,
+            by_return: t.by_return,
+            min: t.min,
+            max: t.max,
             buf: Vec::with_capacity(LAS_WRITE_BYTES + (1 << 16)),
         };
-        for (i, n) in w.by_return.iter_mut().enumerate() {
-            *n = u64_at(255 + 8 * i);
-        }
-        let s = &w.settings;
-        let offset_to_points = u64::from(HEADER_SIZE) + w.settings.vlrs()?.len() as u64;
-        if u16_at(105) != w.settings.record_len()
-            || u64::from(u32_at(96)) != offset_to_points
-            || (0..3)
-                .any(|a| f64_at(131 + 8 * a) != s.scale_m || f64_at(155 + 8 * a) != s.offset_m[a])
-        {
-            return Err(bad(
-                "its record layout, scale or offset differ from the survey's".into(),
-            ));
-        }
-        let expected = w
-            .count
-            .checked_mul(u64::from(w.settings.record_len()))
-            .and_then(|b| b.checked_add(offset_to_points));
-        if expected != Some(len) {
-            return Err(bad(format!(
-                "its header counts {} points but {len} bytes were recorded",
-                w.count
-            )));
-        }
-        if w.count > 0 {
-            for a in 0..3 {
-                // Header bounds are integers × scale + offset: exact inverse.
-                let (max, min) = (f64_at(179 + 16 * a), f64_at(187 + 16 * a));
-                w.max[a] = w
-                    .settings
-                    .quantize(max, a)
-                    .map_err(|e| bad(e.to_string()))?;
-                w.min[a] = w
-                    .settings
-                    .quantize(min, a)
-                    .map_err(|e| bad(e.to_string()))?;
-            }
-        }
         // Only now, with everything checked, are the files touched.
         if let Some(digitizer) = w.settings.waveform {
             let wdp_path = path.with_extension("wdp");
@@ -353,6 +302,68 @@ impl LasWriter {
         }
         w.file = AtomicFile::reopen(path, len)?;
         Ok(w)
+    }
+
+    /// Appends the records of `part`, a LAS file this writer finished with
+    /// the same settings (a part's, in a merge), as they are: its counts,
+    /// counts by return and bounds join this file's, and its records are
+    /// copied without being decoded. Returns the points appended. Only
+    /// plain files without waveforms are appended.
+    pub fn append_file(&mut self, part: &Path) -> io::Result<u64> {
+        if !matches!(self.body, Body::Plain) || self.wdp.is_some() {
+            return Err(file_error(
+                part,
+                io::Error::new(
+                    io::ErrorKind::Unsupported,
+                    "only LAS files without waveforms are appended",
+                ),
+            ));
+        }
+        let t = tally::read(part, part, &self.settings, "append")?;
+        let mut file = std::fs::File::open(part).map_err(|e| file_error(part, e))?;
+        let len = file.metadata().map_err(|e| file_error(part, e))?.len();
+        if t.file_len(&self.settings) != Some(len) {
+            return Err(file_error(
+                part,
+                io::Error::new(
+                    io::ErrorKind::InvalidData,
+                    format!(
+                        "cannot append this file: its header counts {} points but it holds \
+                         {len} bytes",
+                        t.count
+                    ),
+                ),
+            ));
+        }
+        file.seek(SeekFrom::Start(t.offset_to_points))
+            .map_err(|e| file_error(part, e))?;
+        let mut left = len - t.offset_to_points;
+        while left > 0 {
+            let start = self.buf.len();
+            let n = (LAS_WRITE_BYTES as u64).min(left) as usize;
+            self.buf.resize(start + n, 0);
+            if let Err(e) = io::Read::read_exact(&mut file, &mut self.buf[start..]) {
+                self.buf.truncate(start);
+                return Err(file_error(part, e));
+            }
+            left -= n as u64;
+            if self.buf.len() >= LAS_WRITE_BYTES {
+                let r = self.file.write_unbuffered(&self.buf);
+                self.buf.clear();
+                r.map_err(|e| self.file.error(e))?;
+            }
+        }
+        self.count += t.count;
+        for (a, b) in self.by_return.iter_mut().zip(t.by_return) {
+            *a += b;
+        }
+        if t.count > 0 {
+            for a in 0..3 {
+                self.min[a] = self.min[a].min(t.min[a]);
+                self.max[a] = self.max[a].max(t.max[a]);
+            }
+        }
+        Ok(t.count)
     }
 
     /// Writes what is buffered, ends the compressed stream and writes the
@@ -586,6 +597,10 @@ impl PointSink for LasWriter {
 
     fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
         self.encode(points, waveforms)
+    }
+
+    fn append_file(&mut self, file: &Path) -> io::Result<u64> {
+        LasWriter::append_file(self, file)
     }
 
     fn finish(self: Box<Self>) -> io::Result<()> {
