@@ -355,37 +355,39 @@ pub fn write_trajectory(
         .iter()
         .map(|p| AtomicFile::create(p))
         .collect::<io::Result<Vec<_>>>()?;
-    let mut row = String::with_capacity(128);
-    let write_all = |files: &mut [AtomicFile], row: &str| -> io::Result<()> {
+    let write_all = |files: &mut [AtomicFile], row: &[u8]| -> io::Result<()> {
         for f in files.iter_mut() {
-            f.writer()
-                .write_all(row.as_bytes())
-                .map_err(|e| f.error(e))?;
+            f.writer().write_all(row).map_err(|e| f.error(e))?;
         }
         Ok(())
     };
     write_all(
         &mut files,
-        "gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line\n",
+        b"gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line\n",
     )?;
+    // Rows as `{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}` writes them,
+    // a block of them at a time.
+    let mut block = Vec::with_capacity(1 << 16);
     for r in trajectory_rows(survey, lines, observed) {
-        use std::fmt::Write as _;
-        row.clear();
-        writeln!(
-            row,
-            "{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}",
-            r.gps_time_s,
-            r.position_m.x,
-            r.position_m.y,
-            r.position_m.z,
-            r.attitude_deg[0],
-            r.attitude_deg[1],
-            r.attitude_deg[2],
-            r.line
-        )
-        .expect("formatting into a String");
-        write_all(&mut files, &row)?;
+        use crate::output::text::{push_fixed, push_u64};
+        push_fixed(&mut block, r.gps_time_s, 6);
+        for v in r.position_m.to_array() {
+            block.push(b',');
+            push_fixed(&mut block, v, 4);
+        }
+        for v in r.attitude_deg {
+            block.push(b',');
+            push_fixed(&mut block, v, 6);
+        }
+        block.push(b',');
+        push_u64(&mut block, u64::from(r.line));
+        block.push(b'\n');
+        if block.len() >= 1 << 16 {
+            write_all(&mut files, &block)?;
+            block.clear();
+        }
     }
+    write_all(&mut files, &block)?;
     for f in files {
         f.commit()?;
     }

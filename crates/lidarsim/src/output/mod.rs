@@ -13,6 +13,7 @@ mod las;
 pub mod layout;
 pub mod part;
 mod ply;
+pub mod text;
 mod xyz;
 
 pub use las::{
