@@ -154,7 +154,7 @@ impl ReportSink {
         {
             *a += b;
         }
-        let room = MAX_PROFILE_POINTS - self.profile.len().min(MAX_PROFILE_POINTS);
+        let room = MAX_PROFILE_POINTS.saturating_sub(self.profile.len());
         self.profile
             .extend(later.profile.iter().take(room).cloned());
         if let Some(r) = later.richest_pulse
