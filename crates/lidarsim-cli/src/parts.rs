@@ -7,7 +7,8 @@ use std::process::ExitCode;
 
 use lidarsim::Survey;
 use lidarsim::run::RunOptions;
-use lidarsim::run::part::{merge as merge_parts, part_ranges, run_part as simulate_part};
+use lidarsim::run::merge::merge as merge_parts;
+use lidarsim::run::part::{part_ranges, run_part as simulate_part};
 use lidarsim::world::World;
 
 use crate::INTERRUPTED;

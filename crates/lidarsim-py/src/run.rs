@@ -293,6 +293,6 @@ pub fn merge<'py>(
         ..DirOptions::default()
     };
     watched(py, (threads, None, 0), &o, |options| {
-        lidarsim::run::part::merge(&part_dirs, out_dir, options)
+        lidarsim::run::merge::merge(&part_dirs, out_dir, options)
     })
 }

@@ -17,8 +17,9 @@ pub mod text;
 mod xyz;
 
 pub use las::{
-    Digitizer, LasSettings, LasWriter, POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN, WAVEFORM_BITS,
-    WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN, return_numbers, scan_angle_units,
+    Digitizer, JoinedLas, LasSettings, LasWriter, POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN,
+    WAVEFORM_BITS, WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN, join as join_las,
+    return_numbers, scan_angle_units,
 };
 pub use ply::{PLY_PROPERTIES, PLY_RECORD_LEN, PlyWriter};
 pub use xyz::XyzWriter;
@@ -140,19 +141,6 @@ pub trait PointSink: Send {
     fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
         let _ = waveforms;
         self.write(points)
-    }
-    /// Appends the points of `file`, a finished file this kind of sink
-    /// wrote with the same settings (a part of a split run), as they are,
-    /// and returns how many it held. Sinks that cannot keep the default,
-    /// an `Unsupported` error.
-    fn append_file(&mut self, file: &std::path::Path) -> io::Result<u64> {
-        Err(file_error(
-            file,
-            io::Error::new(
-                io::ErrorKind::Unsupported,
-                "this output cannot take a finished file's points as they are",
-            ),
-        ))
     }
     /// Completes the output (headers, renaming).
     fn finish(self: Box<Self>) -> io::Result<()>;

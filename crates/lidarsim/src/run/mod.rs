@@ -7,6 +7,7 @@
 //! `.partial` names with a record a resumed run checks ([`resume`]). The
 //! report's sample waveforms are pulses simulated again ([`replay`]).
 
+pub mod merge;
 pub mod outdir;
 pub mod part;
 pub mod replay;
@@ -134,12 +135,14 @@ pub fn run_to_dir(
 }
 
 /// Opens the sinks of the point files `names`: created afresh, or
-/// continued from the lengths an interrupted run recorded.
+/// continued from the lengths an interrupted run recorded; `joined`, the
+/// writer of a merge's `points.las` holding its parts' points already.
 fn open_sinks(
     survey: &Survey,
     world: &World,
     out_dir: &Path,
     prev: Option<&resume::Interrupted>,
+    joined: Option<Box<LasWriter>>,
 ) -> Result<Vec<Box<dyn PointSink>>, RunError> {
     let formats = &survey.output.formats;
     let origin = survey.output.offset_m.to_array();
@@ -186,9 +189,10 @@ fn open_sinks(
         if formats.las_waveform {
             settings.waveform = Some(digitizer(survey, world));
         }
-        sinks.push(match prev {
-            None => Box::new(LasWriter::create(&path, settings).map_err(created(&path))?),
-            Some(_) => {
+        sinks.push(match (prev, joined) {
+            (_, Some(joined)) => joined,
+            (None, None) => Box::new(LasWriter::create(&path, settings).map_err(created(&path))?),
+            (Some(_), None) => {
                 let wdp = if formats.las_waveform {
                     Some(len("points.wdp")?)
                 } else {
@@ -262,8 +266,15 @@ pub(crate) enum Source<'a> {
     /// The simulator.
     Simulate,
     /// The point files of the parts of a split run, in order, with the
-    /// counts and simulation time they recorded ([`part::merge`]).
-    Parts(&'a [part::PartInput]),
+    /// counts and simulation time they recorded ([`merge::merge`]); the
+    /// output directory is ready, and `points.las` already holds the
+    /// points of stitched parts (`joined`).
+    Parts {
+        /// The parts.
+        parts: &'a [merge::PartInput],
+        /// The writer of `points.las`, holding every part's points.
+        joined: Option<Box<LasWriter>>,
+    },
 }
 
 /// [`run_world_to_dir`] with the points from `source`.
@@ -344,8 +355,10 @@ fn execute_in<'scope>(
         let (prev, state) = resume::read(out_dir, survey, &world.lines, &names)?;
         (Some(prev), state)
     } else {
-        outdir::check_inputs(out_dir, &input_files(survey))?;
-        outdir::prepare_fresh(out_dir, options.overwrite)?;
+        if !matches!(source, Source::Parts { .. }) {
+            outdir::check_inputs(out_dir, &input_files(survey))?;
+            outdir::prepare_fresh(out_dir, options.overwrite)?;
+        }
         (None, Vec::new())
     };
 
@@ -353,9 +366,17 @@ fn execute_in<'scope>(
     let budget = crate::budget::estimate(survey, world, options.threads);
     if !options.no_space_check {
         let total: u64 = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
-        let share = prev.as_ref().map_or(1.0, |p| {
-            1.0 - p.counts().pulse_slots as f64 / total.max(1) as f64
-        });
+        let share = match (&prev, &source) {
+            (Some(p), _) => 1.0 - p.counts().pulse_slots as f64 / total.max(1) as f64,
+            // The points are written already.
+            (
+                None,
+                Source::Parts {
+                    joined: Some(_), ..
+                },
+            ) => 0.0,
+            (None, _) => 1.0,
+        };
         let short = budget.shortfalls(
             out_dir,
             crate::budget::free_bytes(out_dir),
@@ -385,7 +406,11 @@ fn execute_in<'scope>(
         }
     }
 
-    let mut sinks = open_sinks(survey, world, out_dir, prev.as_ref())?;
+    let (parts, joined) = match source {
+        Source::Simulate => (None, None),
+        Source::Parts { parts, joined } => (Some(parts), joined),
+    };
+    let mut sinks = open_sinks(survey, world, out_dir, prev.as_ref(), joined)?;
     let mut files: Vec<String> = names.iter().map(|n| n.to_string()).collect();
     let layout_files = files.len();
     if let Some(dir) = crate::files::layout_dir(survey) {
@@ -403,7 +428,7 @@ fn execute_in<'scope>(
     // them on a thread of their own while it joins the parts' points.
     let mut trajectories = None;
     if prev.is_none() {
-        if matches!(source, Source::Parts(_)) {
+        if parts.is_some() {
             trajectories = Some(scope.spawn(|| write_trajectories(survey, world, out_dir)));
         } else {
             write_trajectories(survey, world, out_dir)?;
@@ -437,16 +462,16 @@ fn execute_in<'scope>(
         pulse_budget: options.pulse_budget,
         only: None,
     };
-    let (result, wall_parts) = match source {
-        Source::Simulate => {
+    let (result, wall_parts) = match parts {
+        None => {
             refs.push(&mut report);
             (
                 sim.run_from(options.threads, &mut refs, &progress, &control),
                 None,
             )
         }
-        Source::Parts(parts) => (
-            part::gather(parts, refs, &mut report, &progress),
+        Some(parts) => (
+            merge::gather(parts, refs, &mut report, &progress),
             Some(parts.iter().map(|p| p.wall_time_s).sum::<f64>()),
         ),
     };

@@ -13,6 +13,7 @@
 //! describes the items, and bit 7 of the point data format byte marks the
 //! file as compressed.
 
+mod join;
 mod tally;
 mod vlr;
 mod wdp;
@@ -23,6 +24,7 @@ use std::path::{Path, PathBuf};
 use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
 
 use super::{AtomicFile, OutFile, PointRecord, PointSink, WaveformBlock, file_error};
+pub use join::{JoinedLas, join};
 use vlr::{ATTRIBUTE_FIELDS, ERROR_FIELDS, fixed_str};
 pub use wdp::{
     Digitizer, WAVEFORM_BITS, WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN,
@@ -535,67 +537,6 @@ impl PointSink for LasWriter {
 
     fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
         self.encode(points, waveforms)
-    }
-
-    /// `part` is a LAS file this writer finished with the same settings (a
-    /// part's, in a merge): its counts, counts by return and bounds join
-    /// this file's, and its records are copied without being decoded. Only
-    /// plain files without waveforms are appended.
-    fn append_file(&mut self, part: &Path) -> io::Result<u64> {
-        if !matches!(self.body, Body::Plain) || self.wdp.is_some() {
-            return Err(file_error(
-                part,
-                io::Error::new(
-                    io::ErrorKind::Unsupported,
-                    "only LAS files without waveforms are appended",
-                ),
-            ));
-        }
-        let t = tally::read(part, part, &self.settings, "append")?;
-        let mut file = std::fs::File::open(part).map_err(|e| file_error(part, e))?;
-        let len = file.metadata().map_err(|e| file_error(part, e))?.len();
-        if t.file_len(&self.settings) != Some(len) {
-            return Err(file_error(
-                part,
-                io::Error::new(
-                    io::ErrorKind::InvalidData,
-                    format!(
-                        "cannot append this file: its header counts {} points but it holds \
-                         {len} bytes",
-                        t.count
-                    ),
-                ),
-            ));
-        }
-        file.seek(SeekFrom::Start(t.offset_to_points))
-            .map_err(|e| file_error(part, e))?;
-        let mut left = len - t.offset_to_points;
-        while left > 0 {
-            let start = self.buf.len();
-            let n = (LAS_WRITE_BYTES as u64).min(left) as usize;
-            self.buf.resize(start + n, 0);
-            if let Err(e) = io::Read::read_exact(&mut file, &mut self.buf[start..]) {
-                self.buf.truncate(start);
-                return Err(file_error(part, e));
-            }
-            left -= n as u64;
-            if self.buf.len() >= LAS_WRITE_BYTES {
-                let r = self.file.write_unbuffered(&self.buf);
-                self.buf.clear();
-                r.map_err(|e| self.file.error(e))?;
-            }
-        }
-        self.count += t.count;
-        for (a, b) in self.by_return.iter_mut().zip(t.by_return) {
-            *a += b;
-        }
-        if t.count > 0 {
-            for a in 0..3 {
-                self.min[a] = self.min[a].min(t.min[a]);
-                self.max[a] = self.max[a].max(t.max[a]);
-            }
-        }
-        Ok(t.count)
     }
 
     fn finish(self: Box<Self>) -> io::Result<()> {

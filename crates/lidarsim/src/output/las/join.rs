@@ -1,0 +1,168 @@
+//! The LAS files of a split run's parts joined into one: copied as they
+//! are ([`join`]) before the settings that check them are known — while a
+//! merge still builds the survey's scene — and then taken over by a writer
+//! of those settings ([`LasWriter::adopt`]), which checks every part
+//! against them and writes the file's own VLRs and, when finished, its
+//! header.
+
+use std::io::{self, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+use super::{Body, HEADER_SIZE, LAS_WRITE_BYTES, LasSettings, LasWriter, tally};
+use crate::output::{AtomicFile, file_error};
+
+/// Offset of "offset to point data" (`u32`) in a LAS 1.4 header.
+const OFFSET_TO_POINTS_AT: usize = 96;
+
+/// Part files joined by [`join`], not yet checked: the first file whole,
+/// then the point records of each later one.
+#[derive(Debug)]
+pub struct JoinedLas {
+    file: AtomicFile,
+    parts: Vec<PathBuf>,
+    /// Bytes written.
+    len: u64,
+}
+
+/// Joins the LAS files `parts` into `path` (as `path.partial` until the
+/// writer that adopts it finishes): the first file as it is, then the
+/// records of each later one (what follows its header and VLRs);
+/// `joined(i)` is called after part `i`. Nothing but the LAS signature is
+/// checked here; [`LasWriter::adopt`] checks the rest.
+pub fn join(
+    path: &Path,
+    parts: &[PathBuf],
+    mut joined: impl FnMut(usize),
+) -> io::Result<JoinedLas> {
+    let mut file = AtomicFile::create(path)?;
+    let mut buf = vec![0u8; LAS_WRITE_BYTES];
+    let mut len = 0u64;
+    for (i, part) in parts.iter().enumerate() {
+        let named = |e| file_error(part, e);
+        let mut f = std::fs::File::open(part).map_err(named)?;
+        let mut header = [0u8; HEADER_SIZE as usize];
+        f.read_exact(&mut header).map_err(named)?;
+        if &header[..4] != b"LASF" {
+            return Err(named(io::Error::new(
+                io::ErrorKind::InvalidData,
+                "cannot append this file: it is not a LAS file",
+            )));
+        }
+        let at = OFFSET_TO_POINTS_AT;
+        let records =
+            u32::from_le_bytes([header[at], header[at + 1], header[at + 2], header[at + 3]]);
+        let start = if i == 0 { 0 } else { u64::from(records) };
+        f.seek(SeekFrom::Start(start)).map_err(named)?;
+        loop {
+            let n = match f.read(&mut buf) {
+                Ok(0) => break,
+                Ok(n) => n,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(named(e)),
+            };
+            file.write_unbuffered(&buf[..n])
+                .map_err(|e| file.error(e))?;
+            len += n as u64;
+        }
+        joined(i);
+    }
+    Ok(JoinedLas {
+        file,
+        parts: parts.to_vec(),
+        len,
+    })
+}
+
+impl LasWriter {
+    /// Takes over `joined` as a plain LAS file of `settings` (no
+    /// compression, no waveforms): every part must be a finished file of
+    /// these settings holding as many bytes as its header counts points
+    /// for, its counts, counts by return and bounds join this file's, and
+    /// the file's VLRs are written from `settings`. Returns the writer, to
+    /// be finished like one that wrote the points itself, and the points
+    /// of each part. A part that fails is named in the error, and the
+    /// joined file is removed.
+    pub fn adopt(joined: JoinedLas, settings: LasSettings) -> io::Result<(Self, Vec<u64>)> {
+        let JoinedLas {
+            mut file,
+            parts,
+            len,
+        } = joined;
+        if settings.compressed || settings.waveform.is_some() {
+            return Err(file.error(io::Error::new(
+                io::ErrorKind::Unsupported,
+                "only LAS files without waveforms are joined",
+            )));
+        }
+        let mut count = 0u64;
+        let mut by_return = [0u64; 15];
+        let (mut min, mut max) = ([i32::MAX; 3], [i32::MIN; 3]);
+        let mut counts = Vec::with_capacity(parts.len());
+        let mut offset_to_points = u64::from(HEADER_SIZE);
+        for part in &parts {
+            let t = tally::read(part, part, &settings, "append")?;
+            let held = std::fs::metadata(part)
+                .map_err(|e| file_error(part, e))?
+                .len();
+            if t.file_len(&settings) != Some(held) {
+                return Err(file_error(
+                    part,
+                    io::Error::new(
+                        io::ErrorKind::InvalidData,
+                        format!(
+                            "cannot append this file: its header counts {} points but it \
+                             holds {held} bytes",
+                            t.count
+                        ),
+                    ),
+                ));
+            }
+            count += t.count;
+            for (a, b) in by_return.iter_mut().zip(t.by_return) {
+                *a += b;
+            }
+            if t.count > 0 {
+                for a in 0..3 {
+                    min[a] = min[a].min(t.min[a]);
+                    max[a] = max[a].max(t.max[a]);
+                }
+            }
+            offset_to_points = t.offset_to_points;
+            counts.push(t.count);
+        }
+        let want = u64::from(settings.record_len())
+            .checked_mul(count)
+            .and_then(|b| b.checked_add(offset_to_points));
+        if want != Some(len) {
+            return Err(file.error(io::Error::new(
+                io::ErrorKind::InvalidData,
+                format!(
+                    "the parts joined into {len} bytes, not the {} their headers count: \
+                     did a part change while it was joined?",
+                    want.map_or_else(|| "overflowing".to_string(), |b| b.to_string())
+                ),
+            )));
+        }
+        let vlrs = settings.vlrs()?;
+        let out = file.writer();
+        let r = out
+            .seek(SeekFrom::Start(u64::from(HEADER_SIZE)))
+            .and_then(|_| out.write_all(&vlrs))
+            .and_then(|()| out.seek(SeekFrom::End(0)).map(|_| ()));
+        if let Err(e) = r {
+            return Err(file.error(e));
+        }
+        let w = Self {
+            file,
+            settings,
+            body: Body::Plain,
+            wdp: None,
+            count,
+            by_return,
+            min,
+            max,
+            buf: Vec::with_capacity(LAS_WRITE_BYTES + (1 << 16)),
+        };
+        Ok((w, counts))
+    }
+}

@@ -1,0 +1,410 @@
+//! The merge of a split run ([`super::part`]): the parts' directories,
+//! given in any order, checked to make one run and joined, in order, in
+//! the writers an unsplit run uses, so that the merged directory holds the
+//! files of the unsplit run byte for byte (the timings of `summary.json`
+//! apart).
+//!
+//! Stitched parts' LAS files ([`super::part::stitched`]) are joined as they
+//! are while the survey's world is built on another thread, then adopted
+//! by the LAS writer of the survey's settings, which checks them
+//! ([`crate::output::LasWriter::adopt`]); their reports' states are
+//! joined. Other parts' points are read back whole and handed to the
+//! writers again.
+//!
+//! A merge refuses parts that do not make one run: a directory that is not
+//! a part, a part that did not finish, a point file cut short or changed,
+//! a part of another survey, seed, number of parts or lidarsim version, a
+//! part given twice and a part missing.
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+use super::part::{PART_LAS, PART_POINTS, PART_RECORD, PartRecord, error, part_ranges, stitched};
+use super::resume::fnv1a_hex;
+use super::{RunError, RunOptions, Source, Summary, execute, outdir};
+use crate::output::part::PartReader;
+use crate::output::{LasWriter, PointRecord, PointSink, WaveformBlock, file_error, join_las};
+use crate::report::ReportSink;
+use crate::sim::{RunCounts, RunOutcome};
+use crate::survey::Survey;
+use crate::world::World;
+
+/// A part given to a merge: its point file, with the counts and the time
+/// its record holds.
+#[derive(Clone, Debug)]
+pub struct PartInput {
+    /// The part's point file.
+    pub points: PathBuf,
+    /// What its report gathered, when the part is stitched.
+    pub report: Option<PathBuf>,
+    /// What the part recorded.
+    pub counts: RunCounts,
+    /// Its simulation time, s.
+    pub wall_time_s: f64,
+}
+
+/// A part directory's record and survey text, checked against its own
+/// files.
+fn read_part(dir: &Path) -> Result<(PartRecord, String), RunError> {
+    let path = dir.join(PART_RECORD);
+    let bytes = std::fs::read(&path).map_err(|e| {
+        error(
+            dir,
+            e.kind(),
+            format!(
+                "not the directory of a part (no readable {PART_RECORD}: {e}); write parts with \
+                 `lidarsim run SURVEY --part K/N -o DIR`"
+            ),
+        )
+    })?;
+    let record: PartRecord = serde_json::from_slice(&bytes).map_err(|e| {
+        error(
+            &path,
+            io::ErrorKind::InvalidData,
+            format!("is not a part's record: {e}"),
+        )
+    })?;
+    if !record.complete {
+        return Err(error(
+            dir,
+            io::ErrorKind::InvalidData,
+            format!(
+                "part {}/{} did not finish (its record says \"complete\": false): run it again",
+                record.part, record.parts
+            ),
+        ));
+    }
+    let survey_path = dir.join("survey.toml");
+    let text = std::fs::read_to_string(&survey_path).map_err(|e| {
+        error(
+            &survey_path,
+            e.kind(),
+            format!("cannot read the part's survey: {e}"),
+        )
+    })?;
+    if fnv1a_hex(text.as_bytes()) != record.survey_fnv1a {
+        return Err(error(
+            &survey_path,
+            io::ErrorKind::InvalidData,
+            "was changed after the part ran (its hash is not the one the part recorded)".into(),
+        ));
+    }
+    if ![PART_POINTS, PART_LAS].contains(&record.points_file.as_str()) {
+        return Err(error(
+            &path,
+            io::ErrorKind::InvalidData,
+            format!(
+                "names its points {:?}, which is neither {PART_POINTS} nor {PART_LAS}",
+                record.points_file
+            ),
+        ));
+    }
+    let mut files = vec![(record.points_file.as_str(), record.points_bytes)];
+    if record.report_bytes > 0 {
+        files.push((super::REPORT_STATE, record.report_bytes));
+    }
+    for (name, bytes) in files {
+        let file = dir.join(name);
+        let len = std::fs::metadata(&file)
+            .map_err(|e| {
+                error(
+                    &file,
+                    e.kind(),
+                    format!("cannot read the part's {name}: {e}"),
+                )
+            })?
+            .len();
+        if len != bytes {
+            return Err(error(
+                &file,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "holds {len} bytes, but part {}/{} wrote {bytes}: it was cut short or changed",
+                    record.part, record.parts
+                ),
+            ));
+        }
+    }
+    Ok((record, text))
+}
+
+/// Merges the parts in `part_dirs` (in any order) into `out_dir`: the files
+/// an unsplit run of their survey writes, byte for byte (the timings of
+/// `summary.json` apart: its `wall_time_s` is the parts' simulation time,
+/// summed). The survey is the parts' `survey.toml`; its world is built
+/// again for the report and the summary.
+pub fn merge(
+    part_dirs: &[PathBuf],
+    out_dir: &Path,
+    options: &RunOptions<'_>,
+) -> Result<Summary, RunError> {
+    let Some(first_dir) = part_dirs.first() else {
+        return Err(error(
+            out_dir,
+            io::ErrorKind::InvalidInput,
+            "no part to merge".into(),
+        ));
+    };
+    let mut parts: Vec<(PathBuf, PartRecord)> = Vec::new();
+    let mut first: Option<(PartRecord, String)> = None;
+    for dir in part_dirs {
+        let (record, text) = read_part(dir)?;
+        if let Some((r0, _)) = &first {
+            let foreign = |what: String| {
+                error(
+                    dir,
+                    io::ErrorKind::InvalidData,
+                    format!(
+                        "part {}/{} is not of the run of {}: {what}",
+                        record.part,
+                        record.parts,
+                        first_dir.display()
+                    ),
+                )
+            };
+            if record.survey_fnv1a != r0.survey_fnv1a {
+                return Err(foreign("its survey.toml differs".into()));
+            }
+            if record.seed != r0.seed {
+                return Err(foreign(format!("seed {} against {}", record.seed, r0.seed)));
+            }
+            if record.parts != r0.parts {
+                return Err(foreign(format!(
+                    "one of {} parts, not {}",
+                    record.parts, r0.parts
+                )));
+            }
+            if record.lidarsim_version != r0.lidarsim_version {
+                return Err(foreign(format!(
+                    "lidarsim {} against {}",
+                    record.lidarsim_version, r0.lidarsim_version
+                )));
+            }
+        } else {
+            first = Some((record.clone(), text));
+        }
+        if let Some((other, _)) = parts.iter().find(|(_, r)| r.part == record.part) {
+            return Err(error(
+                dir,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "part {}/{} is given twice: {} and {}",
+                    record.part,
+                    record.parts,
+                    other.display(),
+                    dir.display()
+                ),
+            ));
+        }
+        parts.push((dir.clone(), record));
+    }
+    let (r0, _) = first.expect("one part at least");
+    let n = r0.parts;
+    let missing: Vec<String> = (1..=n)
+        .filter(|k| !parts.iter().any(|(_, r)| r.part == *k))
+        .map(|k| format!("{k}/{n}"))
+        .collect();
+    if !missing.is_empty() {
+        let which = match missing.as_slice() {
+            [one] => format!("part {one} is"),
+            many => format!("parts {} are", many.join(", ")),
+        };
+        return Err(error(
+            out_dir,
+            io::ErrorKind::NotFound,
+            format!("{which} missing: a merge needs all {n} parts"),
+        ));
+    }
+    parts.sort_by_key(|(_, r)| r.part);
+
+    // The survey the parts ran.
+    let survey_path = parts[0].0.join("survey.toml");
+    let survey = Survey::load(&survey_path)
+        .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string()))?;
+    let (points_file, with_report) = if stitched(&survey) {
+        (PART_LAS, true)
+    } else {
+        (PART_POINTS, false)
+    };
+    for (dir, r) in &parts {
+        if r.points_file != points_file || (r.report_bytes > 0) != with_report {
+            return Err(error(
+                dir,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "part {}/{n} holds {}, but the parts of its survey hold {points_file}{}",
+                    r.part,
+                    r.points_file,
+                    if with_report { " and report.state" } else { "" }
+                ),
+            ));
+        }
+    }
+    let inputs: Vec<PartInput> = parts
+        .iter()
+        .map(|(dir, r)| PartInput {
+            points: dir.join(&r.points_file),
+            report: with_report.then(|| dir.join(super::REPORT_STATE)),
+            counts: r.counts(),
+            wall_time_s: r.wall_time_s,
+        })
+        .collect();
+
+    // Its world; stitched parts' files are joined meanwhile, into the
+    // output directory, made ready first.
+    outdir::check_inputs(out_dir, &crate::files::input_files(&survey))?;
+    outdir::prepare_fresh(out_dir, options.overwrite)?;
+    let build = || {
+        World::build(&survey)
+            .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string()))
+    };
+    let (world, joined) = if with_report {
+        let files: Vec<PathBuf> = inputs.iter().map(|p| p.points.clone()).collect();
+        let path = out_dir.join(PART_LAS);
+        let mut slots = 0;
+        let mut joining = || {
+            join_las(&path, &files, |i| {
+                slots += inputs[i].counts.pulse_slots;
+                (options.progress)(slots);
+            })
+            .map_err(|e| super::run_error(out_dir, e))
+        };
+        let (world, joined) = std::thread::scope(|s| {
+            let world = s.spawn(build);
+            let joined = joining();
+            (
+                world.join().expect("building a world does not panic"),
+                joined,
+            )
+        });
+        (world?, Some(joined?))
+    } else {
+        (build()?, None)
+    };
+    for (dir, r) in &parts {
+        if r.ranges != part_ranges(&survey, &world, r.part, n) {
+            return Err(error(
+                dir,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "part {}/{n} simulated other pulses than its survey splits into part {}",
+                    r.part, r.part
+                ),
+            ));
+        }
+    }
+    let joined = match joined {
+        None => None,
+        Some(joined) => {
+            let settings = crate::files::las_settings(&survey, &world);
+            let (writer, held) =
+                LasWriter::adopt(joined, settings).map_err(|e| super::run_error(out_dir, e))?;
+            for (part, n) in inputs.iter().zip(held) {
+                if n != part.counts.points {
+                    return Err(super::run_error(
+                        out_dir,
+                        miscounted(&part.points, n, part.counts.points),
+                    ));
+                }
+            }
+            Some(Box::new(writer))
+        }
+    };
+    execute(
+        &survey,
+        &world,
+        out_dir,
+        options,
+        Source::Parts {
+            parts: &inputs,
+            joined,
+        },
+    )
+}
+
+/// Joins the points of `parts`, in order, in `sinks` and `report`: the
+/// reports of stitched parts, whose points a writer has adopted already
+/// ([`merge`]), are joined ([`stitch`]); other parts' points are handed
+/// to the writers ([`replay`]).
+pub(crate) fn gather<'a>(
+    parts: &[PartInput],
+    mut sinks: Vec<&'a mut (dyn PointSink + 'static)>,
+    report: &'a mut ReportSink,
+    progress: &(dyn Fn(u64) + Sync),
+) -> io::Result<RunOutcome> {
+    if !parts.is_empty() && parts.iter().all(|p| p.report.is_some()) {
+        stitch(parts, report, progress)
+    } else {
+        sinks.push(report);
+        replay(parts, &mut sinks, progress)
+    }
+}
+
+/// Joins what each stitched part's report gathered to `report`; progress
+/// in pulse slots after each part. The counts are the parts' records.
+fn stitch(
+    parts: &[PartInput],
+    report: &mut ReportSink,
+    progress: &(dyn Fn(u64) + Sync),
+) -> io::Result<RunOutcome> {
+    let mut counts = RunCounts::default();
+    for part in parts {
+        if let Some(path) = &part.report {
+            let state = std::fs::read(path).map_err(|e| file_error(path, e))?;
+            let mut later = report.empty_like();
+            later
+                .restore(&state)
+                .and_then(|()| report.absorb(&later))
+                .map_err(|e| file_error(path, e))?;
+        }
+        counts.add(&part.counts);
+        progress(counts.pulse_slots);
+    }
+    Ok(RunOutcome {
+        counts,
+        stopped_at: None,
+    })
+}
+
+/// A part's point file that holds another number of points than its
+/// record.
+fn miscounted(path: &Path, held: u64, recorded: u64) -> io::Error {
+    file_error(
+        path,
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!("holds {held} points, but its part recorded {recorded}"),
+        ),
+    )
+}
+
+/// Hands the points of `parts`, in order, to `sinks`; progress in pulse
+/// slots after each block. The counts are the parts' records, checked
+/// against the points read.
+fn replay(
+    parts: &[PartInput],
+    sinks: &mut [&mut (dyn PointSink + 'static)],
+    progress: &(dyn Fn(u64) + Sync),
+) -> io::Result<RunOutcome> {
+    let mut counts = RunCounts::default();
+    let (mut points, mut waves): (Vec<PointRecord>, WaveformBlock) = Default::default();
+    for part in parts {
+        let mut reader = PartReader::open(&part.points)?;
+        let mut read = 0u64;
+        while reader.next_block(&mut points, &mut waves)? {
+            for sink in sinks.iter_mut() {
+                sink.write_block(&points, &waves)?;
+            }
+            read += points.len() as u64;
+        }
+        if read != part.counts.points {
+            return Err(miscounted(&part.points, read, part.counts.points));
+        }
+        counts.add(&part.counts);
+        progress(counts.pulse_slots);
+    }
+    Ok(RunOutcome {
+        counts,
+        stopped_at: None,
+    })
+}
