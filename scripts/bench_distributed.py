@@ -5,8 +5,12 @@ a 2-worker Dask LocalCluster (1 thread each) and merged. Prints the wall
 times (scene loading included), the cluster's speed-up over 1 thread and
 its overhead over the 2-thread run, and checks that the merged points.las
 is the unsplit one's bytes. Not part of the test suite (it measures time).
+With --rounds R the three runs are repeated R times, in turn, each split
+on a fresh cluster, and the ratios of each round and their medians are
+printed: on a shared host whose speed drifts, runs side by side in time
+compare fairer than one run of each.
 
-    target/pyenv/bin/python scripts/bench_distributed.py [--lines 4] [--pulses-per-line 10000000]
+    target/pyenv/bin/python scripts/bench_distributed.py [--lines 4] [--pulses-per-line 10000000] [--rounds 1]
 
 Needs the lidarsim package and distributed (scripts/check_python.sh
 installs both into target/pyenv) and target/release/lidarsim.
@@ -14,6 +18,7 @@ installs both into target/pyenv) and target/release/lidarsim.
 
 import argparse
 import os
+import statistics
 import re
 import shutil
 import subprocess
@@ -38,6 +43,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--lines", type=int, default=4)
     ap.add_argument("--pulses-per-line", type=int, default=10_000_000)
+    ap.add_argument("--rounds", type=int, default=1, help="repeat the three runs, in turn")
     ap.add_argument("--keep", action="store_true", help="keep the working directory")
     a = ap.parse_args()
     os.environ.setdefault("SOURCE_DATE_EPOCH", "1700000000")
@@ -67,6 +73,35 @@ def main():
     pulses = a.lines * a.pulses_per_line
     print(f"terrain scene, {a.lines} lines, {pulses} pulses")
 
+    rounds = []
+    for r in range(a.rounds):
+        one, two, split, same = one_round(work, survey)
+        if a.rounds > 1:
+            print(f"round {r + 1}: {one:.2f} / {two:.2f} / {split:.2f} s, speed-up "
+                  f"{one / split:.2f}, overhead {100 * (split / two - 1):+.1f} %", flush=True)
+        rounds.append((one, two, split, same))
+    one, two, split, _ = rounds[-1]
+    if a.rounds == 1:
+        print(f"1 process, 1 thread:      {one:7.2f} s  ({pulses / one:,.0f} pulses/s)")
+        print(f"1 process, 2 threads:     {two:7.2f} s  ({pulses / two:,.0f} pulses/s)")
+        print(f"2 workers x 1 thread:     {split:7.2f} s  ({pulses / split:,.0f} pulses/s), "
+              "parts and merge")
+    speedup = statistics.median(o / s for o, _, s, _ in rounds)
+    overhead = statistics.median(s / t - 1 for _, t, s, _ in rounds)
+    what = "median " if a.rounds > 1 else ""
+    print(f"{what}speed-up over 1 thread:   {speedup:.2f}")
+    print(f"{what}overhead over 2 threads:  {100 * overhead:+.1f} %")
+    print(f"merged points.las is the unsplit run's: {all(r[3] for r in rounds)}")
+    if not a.keep:
+        shutil.rmtree(work, ignore_errors=True)
+
+
+def one_round(work, survey):
+    """The three runs once: wall times of 1 thread, 2 threads and the split
+    (a fresh 2-worker cluster, so that no worker holds the scene already),
+    and whether the split's points.las is the unsplit one's."""
+    for d in ("one", "two", "split", "split.parts"):
+        shutil.rmtree(work / d, ignore_errors=True)
     one, _ = timed(lambda: lidarsim.Survey.load(work / "lines.toml").run_to(
         work / "one", threads=1, progress=False))
     two, _ = timed(lambda: lidarsim.Survey.load(work / "lines.toml").run_to(
@@ -80,15 +115,7 @@ def main():
     client.close()
     cluster.close()
     same = (work / "one" / "points.las").read_bytes() == (work / "split" / "points.las").read_bytes()
-    print(f"1 process, 1 thread:      {one:7.2f} s  ({pulses / one:,.0f} pulses/s)")
-    print(f"1 process, 2 threads:     {two:7.2f} s  ({pulses / two:,.0f} pulses/s)")
-    print(f"2 workers x 1 thread:     {split:7.2f} s  ({pulses / split:,.0f} pulses/s), "
-          "parts and merge")
-    print(f"speed-up over 1 thread:   {one / split:.2f}")
-    print(f"overhead over 2 threads:  {100 * (split / two - 1):+.1f} %")
-    print(f"merged points.las is the unsplit run's: {same}")
-    if not a.keep:
-        shutil.rmtree(work, ignore_errors=True)
+    return one, two, split, same
 
 
 if __name__ == "__main__":

@@ -142,6 +142,11 @@ pub struct MergeArgs {
     /// Merge even if the expected output exceeds the free disk space.
     #[arg(long)]
     pub no_space_check: bool,
+    /// Take the parts: move the first part's LAS file into the output
+    /// instead of copying it, and remove the parts' directories once
+    /// merged.
+    #[arg(long)]
+    pub take_parts: bool,
 }
 
 /// The options of `lidarsim check`.

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use lidarsim::Survey;
 use lidarsim::run::RunOptions;
-use lidarsim::run::merge::merge as merge_parts;
+use lidarsim::run::merge::{Parts, merge as merge_parts};
 use lidarsim::run::part::{part_ranges, run_part as simulate_part};
 use lidarsim::world::World;
 
@@ -76,6 +76,7 @@ pub fn merge(args: MergeArgs) -> ExitCode {
         threads,
         overwrite,
         no_space_check,
+        take_parts,
     } = args;
     let threads = match threads_or_all(threads) {
         Ok(t) => t,
@@ -88,7 +89,8 @@ pub fn merge(args: MergeArgs) -> ExitCode {
         no_space_check,
         ..RunOptions::new(threads, &progress)
     };
-    let result = merge_parts(&parts, &output, &options);
+    let taken = if take_parts { Parts::Take } else { Parts::Keep };
+    let result = merge_parts(&parts, &output, &options, taken);
     bar.finish_and_clear();
     match result {
         Ok(summary) => {

@@ -225,7 +225,16 @@ fn stitched_las_parts_are_the_unsplit_run_byte_for_byte() {
         let merged = dir.join(format!("merged-{n}"));
         let mut args = vec!["merge", "-o", s(&merged)];
         args.extend(parts.iter().map(|p| s(p)));
+        // Three parts are taken: the first part's file moved, not copied,
+        // and the parts gone once merged.
+        let take = n == 3;
+        if take {
+            args.push("--take-parts");
+        }
         ok(&lidarsim(&args));
+        for p in &parts {
+            assert_eq!(p.exists(), !take, "{n} parts: {}", p.display());
+        }
         for f in [
             "points.las",
             "survey.toml",

@@ -24,17 +24,19 @@ pyo3::create_exception!(
 );
 
 /// Merges the parts of a split run (directories of `run_part`) into
-/// `out_dir`: the files of the unsplit run; returns its summary.
+/// `out_dir`: the files of the unsplit run; returns its summary. With
+/// `take_parts` the parts are taken (moved from, then removed).
 #[pyfunction]
-#[pyo3(signature = (part_dirs, out_dir, threads, overwrite=false))]
+#[pyo3(signature = (part_dirs, out_dir, threads, overwrite=false, take_parts=false))]
 fn merge<'py>(
     py: Python<'py>,
     part_dirs: Vec<std::path::PathBuf>,
     out_dir: std::path::PathBuf,
     threads: usize,
     overwrite: bool,
+    take_parts: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
-    run::merge(py, part_dirs, &out_dir, threads, overwrite)
+    run::merge(py, part_dirs, &out_dir, threads, overwrite, take_parts)
 }
 
 /// The module: refuses to load on a processor without the instructions the

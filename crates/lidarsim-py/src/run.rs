@@ -279,20 +279,27 @@ pub fn run_part<'py>(
     })
 }
 
-/// Merges the parts in `part_dirs` into `out_dir` and returns the summary.
+/// Merges the parts in `part_dirs` into `out_dir` and returns the summary;
+/// `take_parts`: [`lidarsim::run::merge::Parts::Take`].
 pub fn merge<'py>(
     py: Python<'py>,
     part_dirs: Vec<std::path::PathBuf>,
     out_dir: &Path,
     threads: usize,
     overwrite: bool,
+    take_parts: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     check_threads(threads)?;
     let o = DirOptions {
         overwrite,
         ..DirOptions::default()
     };
+    let taken = if take_parts {
+        lidarsim::run::merge::Parts::Take
+    } else {
+        lidarsim::run::merge::Parts::Keep
+    };
     watched(py, (threads, None, 0), &o, |options| {
-        lidarsim::run::merge::merge(&part_dirs, out_dir, options)
+        lidarsim::run::merge::merge(&part_dirs, out_dir, options, taken)
     })
 }

@@ -627,12 +627,19 @@ def merge(
     out_dir: PathLike,
     threads: Optional[int] = None,
     overwrite: bool = False,
+    take_parts: bool = False,
 ) -> Dict[str, Any]:
     """Merges the directories of the parts of one split run (in any order)
     into ``out_dir``: the files the unsplit run writes, byte for byte
     (``summary.json``'s timings apart); returns the summary. Refuses, with
     an ``OSError`` naming it, a part missing, given twice, unfinished,
-    changed, or of another survey, seed or number of parts."""
+    changed, or of another survey, seed or number of parts. ``take_parts``:
+    move the first part's LAS file into ``out_dir`` rather than copy it,
+    and remove the parts' directories once merged."""
     return _lidarsim.merge(
-        [os.fspath(p) for p in part_dirs], os.fspath(out_dir), _threads(threads), overwrite
+        [os.fspath(p) for p in part_dirs],
+        os.fspath(out_dir),
+        _threads(threads),
+        overwrite,
+        take_parts,
     )

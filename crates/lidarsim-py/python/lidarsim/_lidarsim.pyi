@@ -12,7 +12,9 @@ TRAJECTORY_FIELDS: List[Tuple[str, str]]
 class SurveyError(ValueError):
     diagnostics: List[Dict[str, Any]]
 
-def merge(part_dirs: List[str], out_dir: str, threads: int, overwrite: bool = False) -> Dict[str, Any]: ...
+def merge(
+    part_dirs: List[str], out_dir: str, threads: int, overwrite: bool = False, take_parts: bool = False
+) -> Dict[str, Any]: ...
 
 class PointStream(Iterator["np.ndarray"]):
     pulses_done: int

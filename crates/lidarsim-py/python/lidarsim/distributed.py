@@ -171,10 +171,12 @@ def run(
         raise
     finally:
         report.close()
-    summary = merge([dirs[k] for k in sorted(dirs)], out, overwrite=overwrite)
+    # Parts not kept are taken by the merge: the first one's LAS file is
+    # moved rather than copied, and every part's directory removed.
+    summary = merge(
+        [dirs[k] for k in sorted(dirs)], out, overwrite=overwrite, take_parts=not keep_parts
+    )
     if not keep_parts:
-        for d in dirs.values():
-            shutil.rmtree(d, ignore_errors=True)
         try:
             where.rmdir()
         except OSError:

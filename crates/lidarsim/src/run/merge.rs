@@ -128,15 +128,30 @@ fn read_part(dir: &Path) -> Result<(PartRecord, String), RunError> {
     Ok((record, text))
 }
 
+/// What a merge does with its parts.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Parts {
+    /// Leaves them as they are: the merge can be made again.
+    #[default]
+    Keep,
+    /// Takes them: the first stitched part's LAS file is moved into the
+    /// output rather than copied (on one file system), and every part's
+    /// directory is removed once the merge is complete. A merge that fails
+    /// after the move leaves that file as the output's `points.las.partial`.
+    Take,
+}
+
 /// Merges the parts in `part_dirs` (in any order) into `out_dir`: the files
 /// an unsplit run of their survey writes, byte for byte (the timings of
 /// `summary.json` apart: its `wall_time_s` is the parts' simulation time,
 /// summed). The survey is the parts' `survey.toml`; its world is built
-/// again for the report and the summary.
+/// again for the report and the summary. The output directory is made
+/// ready (as a run makes it) once the parts' records are checked.
 pub fn merge(
     part_dirs: &[PathBuf],
     out_dir: &Path,
     options: &RunOptions<'_>,
+    taken: Parts,
 ) -> Result<Summary, RunError> {
     let Some(first_dir) = part_dirs.first() else {
         return Err(error(
@@ -263,7 +278,7 @@ pub fn merge(
         let path = out_dir.join(PART_LAS);
         let mut slots = 0;
         let mut joining = || {
-            join_las(&path, &files, |i| {
+            join_las(&path, &files, taken == Parts::Take, |i| {
                 slots += inputs[i].counts.pulse_slots;
                 (options.progress)(slots);
             })
@@ -310,7 +325,7 @@ pub fn merge(
             Some(Box::new(writer))
         }
     };
-    execute(
+    let summary = execute(
         &survey,
         &world,
         out_dir,
@@ -319,7 +334,16 @@ pub fn merge(
             parts: &inputs,
             joined,
         },
-    )
+    )?;
+    if taken == Parts::Take {
+        for (dir, _) in &parts {
+            std::fs::remove_dir_all(dir).map_err(|e| RunError {
+                path: dir.clone(),
+                source: io::Error::new(e.kind(), format!("merged, but not removed: {e}")),
+            })?;
+        }
+    }
+    Ok(summary)
 }
 
 /// Joins the points of `parts`, in order, in `sinks` and `report`: the

@@ -19,40 +19,68 @@ const OFFSET_TO_POINTS_AT: usize = 96;
 #[derive(Debug)]
 pub struct JoinedLas {
     file: AtomicFile,
-    parts: Vec<PathBuf>,
+    parts: Vec<Joined>,
     /// Bytes written.
+    len: u64,
+}
+
+/// One part as it was joined.
+#[derive(Debug)]
+struct Joined {
+    /// The part's file, as errors name it.
+    named: PathBuf,
+    /// Where its header is read: the part's file, or the joined file when
+    /// the part's file was moved to become it.
+    header: PathBuf,
+    /// Bytes its file held.
     len: u64,
 }
 
 /// Joins the LAS files `parts` into `path` (as `path.partial` until the
 /// writer that adopts it finishes): the first file as it is, then the
 /// records of each later one (what follows its header and VLRs);
-/// `joined(i)` is called after part `i`. Nothing but the LAS signature is
-/// checked here; [`LasWriter::adopt`] checks the rest.
+/// `joined(i)` is called after part `i`. With `take_first` the first file
+/// is moved into place rather than copied, when the file system allows
+/// it (it is gone from its part then, and a failure later leaves the
+/// joined file behind under its `.partial` name). Nothing but the LAS
+/// signature is checked here; [`LasWriter::adopt`] checks the rest.
 pub fn join(
     path: &Path,
     parts: &[PathBuf],
+    take_first: bool,
     mut joined: impl FnMut(usize),
 ) -> io::Result<JoinedLas> {
-    let mut file = AtomicFile::create(path)?;
-    let mut buf = vec![0u8; LAS_WRITE_BYTES];
-    let mut len = 0u64;
-    for (i, part) in parts.iter().enumerate() {
-        let named = |e| file_error(part, e);
-        let mut f = std::fs::File::open(part).map_err(named)?;
-        let mut header = [0u8; HEADER_SIZE as usize];
-        f.read_exact(&mut header).map_err(named)?;
-        if &header[..4] != b"LASF" {
-            return Err(named(io::Error::new(
-                io::ErrorKind::InvalidData,
-                "cannot append this file: it is not a LAS file",
-            )));
+    let partial = AtomicFile::partial_of(path);
+    let mut moved = None;
+    if take_first && let Some(first) = parts.first() {
+        signature(first)?;
+        if std::fs::rename(first, &partial).is_ok() {
+            let len = std::fs::metadata(&partial)
+                .map_err(|e| file_error(&partial, e))?
+                .len();
+            moved = Some((AtomicFile::reopen(path, len)?, len));
         }
-        let at = OFFSET_TO_POINTS_AT;
-        let records =
-            u32::from_le_bytes([header[at], header[at + 1], header[at + 2], header[at + 3]]);
-        let start = if i == 0 { 0 } else { u64::from(records) };
+    }
+    let mut out = Vec::with_capacity(parts.len());
+    let (mut file, mut len) = match moved {
+        Some((file, len)) => {
+            out.push(Joined {
+                named: parts[0].clone(),
+                header: partial,
+                len,
+            });
+            joined(0);
+            (file, len)
+        }
+        None => (AtomicFile::create(path)?, 0),
+    };
+    let mut buf = vec![0u8; LAS_WRITE_BYTES];
+    for (i, part) in parts.iter().enumerate().skip(out.len()) {
+        let named = |e| file_error(part, e);
+        let (mut f, records) = signature(part)?;
+        let start = if i == 0 { 0 } else { records };
         f.seek(SeekFrom::Start(start)).map_err(named)?;
+        let mut copied = start;
         loop {
             let n = match f.read(&mut buf) {
                 Ok(0) => break,
@@ -63,14 +91,38 @@ pub fn join(
             file.write_unbuffered(&buf[..n])
                 .map_err(|e| file.error(e))?;
             len += n as u64;
+            copied += n as u64;
         }
+        out.push(Joined {
+            named: part.clone(),
+            header: part.clone(),
+            len: copied,
+        });
         joined(i);
     }
     Ok(JoinedLas {
         file,
-        parts: parts.to_vec(),
+        parts: out,
         len,
     })
+}
+
+/// `part` opened, once its first bytes are a LAS header's, with the
+/// offset to its point records.
+fn signature(part: &Path) -> io::Result<(std::fs::File, u64)> {
+    let named = |e| file_error(part, e);
+    let mut f = std::fs::File::open(part).map_err(named)?;
+    let mut header = [0u8; HEADER_SIZE as usize];
+    f.read_exact(&mut header).map_err(named)?;
+    if &header[..4] != b"LASF" {
+        return Err(named(io::Error::new(
+            io::ErrorKind::InvalidData,
+            "cannot append this file: it is not a LAS file",
+        )));
+    }
+    let at = OFFSET_TO_POINTS_AT;
+    let records = u32::from_le_bytes([header[at], header[at + 1], header[at + 2], header[at + 3]]);
+    Ok((f, u64::from(records)))
 }
 
 impl LasWriter {
@@ -100,13 +152,11 @@ impl LasWriter {
         let mut counts = Vec::with_capacity(parts.len());
         let mut offset_to_points = u64::from(HEADER_SIZE);
         for part in &parts {
-            let t = tally::read(part, part, &settings, "append")?;
-            let held = std::fs::metadata(part)
-                .map_err(|e| file_error(part, e))?
-                .len();
+            let t = tally::read(&part.header, &part.named, &settings, "append")?;
+            let held = part.len;
             if t.file_len(&settings) != Some(held) {
                 return Err(file_error(
-                    part,
+                    &part.named,
                     io::Error::new(
                         io::ErrorKind::InvalidData,
                         format!(
