@@ -157,14 +157,17 @@ impl Species {
         let margin = 1e-10 * d;
         for _ in 0..80 {
             let mid = 0.5 * (lo + hi);
-            let below = if mid < d - margin {
-                true
-            } else if mid > d + margin {
-                false
+            // A choice of values, not of branches, where the side is known
+            // (the side is as good as random from step to step).
+            let below = if (mid - d).abs() > margin {
+                mid < d
             } else {
                 self.height_from_dbh_m(mid) < height_m
             };
-            let (l, h) = if below { (mid, hi) } else { (lo, mid) };
+            let (l, h) = (
+                if below { mid } else { lo },
+                if below { hi } else { mid },
+            );
             // Once the interval stops changing it never changes again (the
             // step depends on it alone): the same answer as all 80 steps,
             // after about 55.
