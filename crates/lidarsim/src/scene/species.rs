@@ -164,10 +164,7 @@ impl Species {
             } else {
                 self.height_from_dbh_m(mid) < height_m
             };
-            let (l, h) = (
-                if below { mid } else { lo },
-                if below { hi } else { mid },
-            );
+            let (l, h) = (if below { mid } else { lo }, if below { hi } else { mid });
             // Once the interval stops changing it never changes again (the
             // step depends on it alone): the same answer as all 80 steps,
             // after about 55.
