@@ -133,7 +133,8 @@ impl LasWriter {
     /// the file's VLRs are written from `settings`. Returns the writer, to
     /// be finished like one that wrote the points itself, and the points
     /// of each part. A part that fails is named in the error, and the
-    /// joined file is removed.
+    /// joined file is removed (kept, under its `.partial` name, when the
+    /// first part's file was moved to become it).
     pub fn adopt(joined: JoinedLas, settings: LasSettings) -> io::Result<(Self, Vec<u64>)> {
         let JoinedLas {
             mut file,
