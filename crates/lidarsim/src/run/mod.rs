@@ -328,6 +328,11 @@ fn execute_in<'scope>(
         let path = path.to_path_buf();
         move |source| RunError { path, source }
     };
+    // A merge's parts, and the writer holding its stitched parts' points.
+    let (parts, joined) = match source {
+        Source::Simulate => (None, None),
+        Source::Parts { parts, joined } => (Some(parts), joined),
+    };
     let summary_path = out_dir.join("summary.json");
     let state_path = out_dir.join(REPORT_STATE);
     let names = point_files(survey);
@@ -355,7 +360,8 @@ fn execute_in<'scope>(
         let (prev, state) = resume::read(out_dir, survey, &world.lines, &names)?;
         (Some(prev), state)
     } else {
-        if !matches!(source, Source::Parts { .. }) {
+        // A merge has made the directory ready itself.
+        if parts.is_none() {
             outdir::check_inputs(out_dir, &input_files(survey))?;
             outdir::prepare_fresh(out_dir, options.overwrite)?;
         }
@@ -366,16 +372,11 @@ fn execute_in<'scope>(
     let budget = crate::budget::estimate(survey, world, options.threads);
     if !options.no_space_check {
         let total: u64 = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
-        let share = match (&prev, &source) {
-            (Some(p), _) => 1.0 - p.counts().pulse_slots as f64 / total.max(1) as f64,
+        let share = match &prev {
+            Some(p) => 1.0 - p.counts().pulse_slots as f64 / total.max(1) as f64,
             // The points are written already.
-            (
-                None,
-                Source::Parts {
-                    joined: Some(_), ..
-                },
-            ) => 0.0,
-            (None, _) => 1.0,
+            None if joined.is_some() => 0.0,
+            None => 1.0,
         };
         let short = budget.shortfalls(
             out_dir,
@@ -406,10 +407,6 @@ fn execute_in<'scope>(
         }
     }
 
-    let (parts, joined) = match source {
-        Source::Simulate => (None, None),
-        Source::Parts { parts, joined } => (Some(parts), joined),
-    };
     let mut sinks = open_sinks(survey, world, out_dir, prev.as_ref(), joined)?;
     let mut files: Vec<String> = names.iter().map(|n| n.to_string()).collect();
     let layout_files = files.len();
