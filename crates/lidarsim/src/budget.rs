@@ -128,7 +128,7 @@ fn scene_bytes(scene: &Scene) -> u64 {
         + scene
             .objects
             .iter()
-            .map(|o| o.name.len() as u64 + 48)
+            .map(|o| (std::mem::size_of_val(o) + o.heap_bytes()) as u64)
             .sum::<u64>()
 }
 

@@ -225,11 +225,41 @@ pub type MaterialId = u32;
 /// Index of an object in [`Scene::objects`].
 pub type ObjectId = u32;
 
-/// A survey entry that produced primitives: one polygon, or one mesh.
+/// A survey entry that produced primitives: one polygon, mesh, terrain,
+/// point cloud or tree.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SceneObject {
-    /// Human-readable name (`polygon[3]`, `mesh[0]:house.obj`).
-    pub name: String,
+pub enum SceneObject {
+    /// An entry by its human-readable name (`polygon[3]`,
+    /// `mesh[0]:house.obj`, `tree[2]`).
+    Named(String),
+    /// Tree `tree` of the survey's `[[forest]]` entry `forest`: a stand
+    /// has up to millions, named by their two numbers rather than a text
+    /// each.
+    StandTree {
+        /// Index of the `[[forest]]` entry.
+        forest: u32,
+        /// Index of the tree in the stand, in the order it was placed.
+        tree: u32,
+    },
+}
+
+impl std::fmt::Display for SceneObject {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SceneObject::Named(name) => f.write_str(name),
+            SceneObject::StandTree { forest, tree } => write!(f, "forest[{forest}].tree[{tree}]"),
+        }
+    }
+}
+
+impl SceneObject {
+    /// Bytes its name takes on the heap.
+    pub fn heap_bytes(&self) -> usize {
+        match self {
+            SceneObject::Named(name) => name.capacity(),
+            SceneObject::StandTree { .. } => 0,
+        }
+    }
 }
 
 /// The geometric shape of a primitive: a closed set, so an enum.
@@ -379,7 +409,7 @@ impl Scene {
     /// [`Scene::add_material`] for the material named `prefix` + `suffix`,
     /// without building the name when the material is there already (a
     /// stand adds the same few materials for every tree).
-    fn add_named_material(
+    pub(crate) fn add_named_material(
         &mut self,
         prefix: &str,
         suffix: &str,
@@ -407,7 +437,7 @@ impl Scene {
 
     /// Adds an object record and returns its id.
     pub fn add_object(&mut self, name: impl Into<String>) -> ObjectId {
-        self.objects.push(SceneObject { name: name.into() });
+        self.objects.push(SceneObject::Named(name.into()));
         (self.objects.len() - 1) as ObjectId
     }
 }

@@ -184,9 +184,7 @@ pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> B
         }
         forest_trees.push(trees.len());
         owners.push((fp.clone(), scene.primitives.len()));
-        for (j, tree) in trees.iter().enumerate() {
-            scene.add_tree(tree, whorl, format!("forest[{i}].tree[{j}]"));
-        }
+        scene.add_stand(i, &trees, whorl);
     }
     check_far(&scene, &owners, problems);
     let (index, index_time_s) = index(scene);

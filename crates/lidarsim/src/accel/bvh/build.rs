@@ -77,7 +77,7 @@ impl Bvh {
         let (wide, depth) = collapse(&nodes, used);
         drop(nodes);
         let mut scene = scene;
-        in_leaf_order(&mut scene.primitives, order);
+        scene.primitives = in_leaf_order(std::mem::take(&mut scene.primitives), &order);
         bvh.scene = scene;
         bvh.nodes = wide;
         bvh.stack_len = stack_len(depth);
@@ -186,24 +186,44 @@ impl Bvh {
     }
 }
 
-/// Reorders `prims` in place so that the `i`-th is the one `order[i]` named
-/// (following each cycle of the permutation, without a second copy): the
-/// primitives of a leaf, and of neighbouring leaves, then lie next to each
-/// other in memory, and a leaf names its primitives directly.
-pub(super) fn in_leaf_order<T>(prims: &mut [T], mut order: Vec<u32>) {
-    const DONE: u32 = u32::MAX;
-    for start in 0..order.len() {
-        let mut at = start;
-        while order[at] != DONE {
-            let from = order[at] as usize;
-            order[at] = DONE;
-            if from == start {
-                break;
-            }
-            prims.swap(at, from);
-            at = from;
-        }
-    }
+/// `prims` in leaf order: the `i`-th of the result is `prims[order[i]]`
+/// (the primitives of a leaf, and of neighbouring leaves, then lie next to
+/// each other in memory, and a leaf names its primitives directly). Each
+/// element is moved once, gathered on all threads into a new array: the
+/// moves are random reads, and an in-place reordering, one cycle of the
+/// permutation after another, waits for two of them at every step. The
+/// array is held twice for a moment, after the binary tree and the build's
+/// boxes are freed.
+///
+/// # Panics
+/// If `order` is not a permutation of `0..prims.len()`.
+pub(super) fn in_leaf_order<T: Send + Sync>(prims: Vec<T>, order: &[u32]) -> Vec<T> {
+    let mut seen = vec![false; prims.len()];
+    let permutation = order.len() == prims.len()
+        && order.iter().all(|&i| {
+            seen.get_mut(i as usize)
+                .is_some_and(|s| !std::mem::replace(s, true))
+        });
+    assert!(
+        permutation,
+        "the leaf order is a permutation of the primitives"
+    );
+    drop(seen);
+    let mut from = std::mem::ManuallyDrop::new(prims);
+    let source = &from[..];
+    let gathered: Vec<T> = order
+        .par_iter()
+        // SAFETY: `order` is a permutation of the indices (checked above),
+        // so every element is read exactly once, and `from` is never
+        // dropped with its elements: below, its buffer is freed alone. A
+        // panic on the way would leak the elements, not drop them twice.
+        .map(|&i| unsafe { std::ptr::read(&source[i as usize]) })
+        .collect();
+    // SAFETY: every element was moved out above; length 0 frees the buffer
+    // without dropping them.
+    unsafe { from.set_len(0) };
+    drop(std::mem::ManuallyDrop::into_inner(from));
+    gathered
 }
 
 /// `n` binary nodes, all zero (empty leaves over nothing). Zeroed memory

@@ -156,11 +156,18 @@ fn reordering_in_place_follows_the_order() {
             }
             let items: Vec<u64> = (0..n as u64).map(|i| 1000 + i * i).collect();
             let want: Vec<u64> = order.iter().map(|&i| items[i as usize]).collect();
-            let mut got = items.clone();
-            in_leaf_order(&mut got, order);
+            let got = in_leaf_order(items.clone(), &order);
             assert_eq!(got, want);
         }
     }
+}
+
+/// A leaf order that names an element twice (and so misses one) is refused
+/// rather than gathered.
+#[test]
+#[should_panic(expected = "permutation")]
+fn leaf_order_must_be_a_permutation() {
+    in_leaf_order(vec![1, 2, 3], &[0, 2, 2]);
 }
 
 /// The bundle's box test never leaves out a box one of its rays
