@@ -18,7 +18,7 @@ mod triangle;
 
 pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
 pub use species::{Species, SpeciesPreset};
-pub use tree::{Crown, CrownLevel, CrownProfile, TreeSpec, Trunk};
+pub use tree::{Crown, CrownLevel, CrownProfile, Envelope, TreeSpec, Trunk};
 pub use triangle::{
     Coverage, EdgeTest, Straddle, Triangle, TriangleFan, bundle_cone, bundle_spread,
 };

@@ -326,7 +326,9 @@ impl ShapeFactor {
             Self::Sqrt => chi.sqrt(),
             Self::Table(t) => {
                 let x = chi.clamp(0.0, 1.0) * SHAPE_CELLS as f64;
-                let i = (x as usize).min(SHAPE_CELLS - 1);
+                // Through i32, a cheaper conversion than to usize: x is
+                // within [0, SHAPE_CELLS].
+                let i = ((x as i32) as usize).min(SHAPE_CELLS - 1);
                 let f = x - i as f64;
                 t[i] + (t[i + 1] - t[i]) * f
             }
@@ -373,14 +375,42 @@ impl CrownProfile {
     /// angle, so that no `powf` or `sin_cos` is left per step.
     #[inline]
     pub fn level(&self, z: f64) -> Option<CrownLevel> {
+        self.envelope(z).map(|e| self.level_within(e))
+    }
+
+    /// The envelope at world height `z` (`None` above or below the crown):
+    /// the first half of [`CrownProfile::level`], enough to tell whether a
+    /// pulse reaches the crown there before the rest is worked out.
+    #[inline]
+    pub fn envelope(&self, z: f64) -> Option<Envelope> {
         let c = &self.crown;
         if z > c.z_top || z < c.z_base {
             return None;
         }
         let chi = (c.z_top - z) / (c.z_top - c.z_base);
-        let radius = c.a + c.b * self.shape.at(chi);
+        Some(Envelope {
+            z,
+            chi,
+            radius: c.a + c.b * self.shape.at(chi),
+        })
+    }
+
+    /// [`CrownProfile::level`] where the envelope is `e`.
+    #[inline]
+    pub fn level_within(&self, e: Envelope) -> CrownLevel {
+        let c = &self.crown;
+        let Envelope { z, chi, radius } = e;
         let whorl = ((c.z_top - z) / c.whorl_spacing_m).floor();
-        let rotation = self.rotations.and_then(|t| t.get(whorl as usize));
+        // The whorl's number through i64: a cheaper conversion than to
+        // usize, the same for the table's range (and out of it otherwise).
+        let rotation = self.rotations.and_then(|t| {
+            let w = whorl as i64;
+            if (0..t.len() as i64).contains(&w) {
+                Some(&t[w as usize])
+            } else {
+                None
+            }
+        });
         let (whorl_cos, whorl_sin) = match rotation {
             Some(&(rc, rs)) => (
                 c.phase_cos * rc - c.phase_sin * rs,
@@ -391,7 +421,7 @@ impl CrownProfile {
                 (co, s)
             }
         };
-        Some(CrownLevel {
+        CrownLevel {
             radius_sq: radius * radius,
             radius,
             inv_radius: if radius > 0.0 { 1.0 / radius } else { 0.0 },
@@ -399,8 +429,19 @@ impl CrownProfile {
             whorl_cos,
             whorl_sin,
             uniform_density: c.uniform_density,
-        })
+        }
     }
+}
+
+/// A crown's envelope at one height ([`CrownProfile::envelope`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Envelope {
+    /// World height, m.
+    pub z: f64,
+    /// Relative depth in the crown `χ` (0 at the top, 1 at the base).
+    pub chi: f64,
+    /// Envelope radius `r(χ)`, m.
+    pub radius: f64,
 }
 
 impl Crown {

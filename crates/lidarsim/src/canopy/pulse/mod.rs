@@ -283,12 +283,13 @@ impl PulseMarch {
                 if beyond(crown.max_radius_m()) {
                     continue;
                 }
-                let Some(level) = m.profile.level(z) else {
+                let Some(envelope) = m.profile.envelope(z) else {
                     continue;
                 };
-                if beyond(level.radius) {
+                if beyond(envelope.radius) {
                     continue;
                 }
+                let level = m.profile.level_within(envelope);
                 self.rows.push(Row {
                     met: mi,
                     cell: Cell {
