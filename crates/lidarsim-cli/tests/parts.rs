@@ -311,6 +311,47 @@ fn stitched_las_parts_are_the_unsplit_run_byte_for_byte() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// A merge that cannot build its survey's world (a scene file changed since
+/// the parts ran) is refused, naming the file, and leaves the earlier run
+/// in its output directory as it was.
+#[test]
+fn a_merge_that_cannot_build_its_world_keeps_the_earlier_run() {
+    let dir = temp("parts-world");
+    let mesh = dir.join("shed.obj");
+    std::fs::write(&mesh, "v -5 -5 3\nv 5 -5 3\nv 5 5 3\nv -5 5 3\nf 1 2 3 4\n").unwrap();
+    let survey = dir.join("survey.toml");
+    let text = SURVEY.replace(
+        r#"formats = ["las-waveform", "laz", "ply", "xyz"]"#,
+        r#"formats = ["las"]"#,
+    ) + "\n[[mesh]]\nfile = \"shed.obj\"\nmaterial = \"roof\"\nclass = \"roof\"\n";
+    std::fs::write(&survey, text).unwrap();
+    let parts = run_parts(&dir, &survey, 2, &[2, 1]);
+    let out = dir.join("merged");
+    let merge = || lidarsim(&["merge", "-o", s(&out), s(&parts[0]), s(&parts[1])]);
+    ok(&merge());
+    let files = tree(&out);
+    assert!(files.iter().any(|f| f.ends_with("points.las")), "{files:?}");
+    let before: Vec<Vec<u8>> = files
+        .iter()
+        .map(|f| std::fs::read(out.join(f)).unwrap())
+        .collect();
+    // A face naming a vertex the file does not have.
+    std::fs::write(&mesh, "v -5 -5 3\nv 5 -5 3\nf 1 2 9\n").unwrap();
+    let o = merge();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(!e.contains("panicked") && e.contains("mesh[0]"), "{e}");
+    assert_eq!(tree(&out), files, "{e}");
+    for (f, bytes) in files.iter().zip(&before) {
+        assert!(
+            std::fs::read(out.join(f)).unwrap() == *bytes,
+            "{} changed",
+            f.display()
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Every file under `dir`, relative to it, sorted.
 fn tree(dir: &Path) -> Vec<PathBuf> {
     let mut out = Vec::new();

@@ -288,8 +288,15 @@ impl AtomicFile {
     /// symbolic link already under that name is removed (the link, never
     /// what it points to), so that nothing outside the output is written.
     pub fn create(target: &Path) -> io::Result<Self> {
-        let partial = Self::partial_of(target);
         remove_if_present(target)?;
+        Self::create_beside(target)
+    }
+
+    /// [`AtomicFile::create`] that leaves a final file already at `target`
+    /// until this one is committed over it: for a caller that removes that
+    /// file itself, once it knows its run will go ahead.
+    pub fn create_beside(target: &Path) -> io::Result<Self> {
+        let partial = Self::partial_of(target);
         remove_if_present(&partial)?;
         let file = std::fs::OpenOptions::new()
             .write(true)

@@ -145,8 +145,10 @@ pub enum Parts {
 /// an unsplit run of their survey writes, byte for byte (the timings of
 /// `summary.json` apart: its `wall_time_s` is the parts' simulation time,
 /// summed). The survey is the parts' `survey.toml`; its world is built
-/// again for the report and the summary. The output directory is made
-/// ready (as a run makes it) once the parts' records are checked.
+/// again for the report and the summary. The output directory is claimed
+/// (refused as a run refuses it) once the parts' records are checked, and
+/// cleared of an earlier run's files once the world is built: a merge that
+/// cannot build it leaves them as they were.
 pub fn merge(
     part_dirs: &[PathBuf],
     out_dir: &Path,
@@ -266,9 +268,11 @@ pub fn merge(
         .collect();
 
     // Its world; stitched parts' files are joined meanwhile, into the
-    // output directory, made ready first.
+    // output directory, claimed first and cleared of an earlier run's files
+    // once the world is built: a merge that cannot build it leaves them.
     outdir::check_inputs(out_dir, &crate::files::input_files(&survey))?;
-    outdir::prepare_fresh(out_dir, options.overwrite)?;
+    let claimed = outdir::claim(out_dir, options.overwrite)?;
+    let joined_at = crate::output::AtomicFile::partial_of(&out_dir.join(PART_LAS));
     let build = || {
         World::build(&survey)
             .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string()))
@@ -276,6 +280,7 @@ pub fn merge(
     let (world, joined) = if with_report {
         let files: Vec<PathBuf> = inputs.iter().map(|p| p.points.clone()).collect();
         let path = out_dir.join(PART_LAS);
+        debug_assert_eq!(crate::output::AtomicFile::partial_of(&path), joined_at);
         let mut slots = 0;
         let mut joining = || {
             join_las(&path, &files, taken == Parts::Take, |i| {
@@ -296,6 +301,7 @@ pub fn merge(
     } else {
         (build()?, None)
     };
+    claimed.clear(joined.is_some().then_some(joined_at.as_path()))?;
     for (dir, r) in &parts {
         if r.ranges != part_ranges(&survey, &world, r.part, n) {
             return Err(error(

@@ -151,6 +151,25 @@ pub fn check_inputs(dir: &Path, inputs: &[PathBuf]) -> Result<(), RunError> {
 /// unless `overwrite`, which removes only the files a run writes and
 /// leaves the rest. The marker is written last.
 pub fn prepare_fresh(dir: &Path, overwrite: bool) -> Result<(), RunError> {
+    claim(dir, overwrite)?.clear(None)
+}
+
+/// An output directory a run may write into, with the files an earlier run
+/// left there ([`claim`]), not yet removed.
+#[derive(Debug)]
+pub struct Claimed {
+    dir: PathBuf,
+    /// Files a run writes.
+    files: Vec<PathBuf>,
+    /// The run's own subdirectories with their entries.
+    own: Vec<(&'static str, Vec<PathBuf>)>,
+}
+
+/// The first half of [`prepare_fresh`]: creates `dir` if missing and
+/// refuses it as [`prepare_fresh`] does, but removes nothing yet, so that a
+/// run can still fail (its survey's world, say) without losing the earlier
+/// run's files.
+pub fn claim(dir: &Path, overwrite: bool) -> Result<Claimed, RunError> {
     if dir.exists() && !dir.is_dir() {
         return Err(error(
             dir,
@@ -199,49 +218,69 @@ pub fn prepare_fresh(dir: &Path, overwrite: bool) -> Result<(), RunError> {
             ),
         ));
     }
-    for path in ours {
-        let meta = std::fs::symlink_metadata(&path).map_err(|e| RunError {
+    for path in &ours {
+        let meta = std::fs::symlink_metadata(path).map_err(|e| RunError {
             path: path.clone(),
             source: e,
         })?;
         if meta.is_dir() {
             return Err(error(
-                &path,
+                path,
                 io::ErrorKind::AlreadyExists,
                 "is a directory where the run writes a file: move it away".into(),
             ));
         }
-        // A symbolic link is removed itself, never what it points to.
-        std::fs::remove_file(&path).map_err(|e| RunError {
-            path: path.clone(),
-            source: e,
-        })?;
     }
-    // The scene data, strips and tiles an earlier run wrote, and their
-    // directories.
-    for (sub, entries) in own {
-        for path in entries {
-            let removed = if path.is_dir() {
-                std::fs::remove_dir_all(&path)
-            } else {
-                std::fs::remove_file(&path)
-            };
-            removed.map_err(|e| RunError {
-                path: path.clone(),
-                source: e,
-            })?;
-        }
-        let path = dir.join(sub);
-        std::fs::remove_dir(&path).map_err(|e| RunError { path, source: e })?;
-    }
-    crate::output::write_atomic(
-        &dir.join(MARKER),
-        b"lidarsim writes its runs into this directory; a new run replaces only its own files.\n",
-    )
-    .map_err(|e| RunError {
-        path: dir.join(MARKER),
-        source: e,
+    Ok(Claimed {
+        dir: dir.to_path_buf(),
+        files: ours,
+        own,
     })
+}
+
+impl Claimed {
+    /// The second half of [`prepare_fresh`]: removes the earlier run's
+    /// files (but `keep`, a file this run has begun meanwhile) and writes
+    /// the marker.
+    pub fn clear(self, keep: Option<&Path>) -> Result<(), RunError> {
+        for path in self.files {
+            if keep == Some(path.as_path()) {
+                continue;
+            }
+            // A symbolic link is removed itself, never what it points to.
+            match std::fs::remove_file(&path) {
+                Err(e) if e.kind() != io::ErrorKind::NotFound => {
+                    return Err(RunError { path, source: e });
+                }
+                _ => {}
+            }
+        }
+        // The scene data, strips and tiles an earlier run wrote, and their
+        // directories.
+        for (sub, entries) in self.own {
+            for path in entries {
+                let removed = if path.is_dir() {
+                    std::fs::remove_dir_all(&path)
+                } else {
+                    std::fs::remove_file(&path)
+                };
+                removed.map_err(|e| RunError {
+                    path: path.clone(),
+                    source: e,
+                })?;
+            }
+            let path = self.dir.join(sub);
+            std::fs::remove_dir(&path).map_err(|e| RunError { path, source: e })?;
+        }
+        crate::output::write_atomic(
+            &self.dir.join(MARKER),
+            b"lidarsim writes its runs into this directory; a new run replaces only its own files.\n",
+        )
+        .map_err(|e| RunError {
+            path: self.dir.join(MARKER),
+            source: e,
+        })
+    }
 }
 
 #[cfg(test)]

@@ -43,7 +43,9 @@ struct Joined {
 /// is moved into place rather than copied, when the file system allows
 /// it (it is gone from its part then, and a failure later leaves the
 /// joined file behind under its `.partial` name). Nothing but the LAS
-/// signature is checked here; [`LasWriter::adopt`] checks the rest.
+/// signature is checked here; [`LasWriter::adopt`] checks the rest. A
+/// file already at `path` is left for the caller to remove (the merge does
+/// once its survey's world is built) or for the joined file to replace.
 pub fn join(
     path: &Path,
     parts: &[PathBuf],
@@ -72,7 +74,7 @@ pub fn join(
             joined(0);
             (file, len)
         }
-        None => (AtomicFile::create(path)?, 0),
+        None => (AtomicFile::create_beside(path)?, 0),
     };
     let mut buf = vec![0u8; LAS_WRITE_BYTES];
     for (i, part) in parts.iter().enumerate().skip(out.len()) {
