@@ -18,6 +18,10 @@ pub fn command(args: CheckArgs) -> ExitCode {
         Ok((s, w)) => {
             warn(&s, &w);
             check(&s, &w, &args.output);
+            // The process ends here: its memory goes back whole, faster
+            // than the world's millions of primitives are dropped one by
+            // one (0.3 s for a stand of 1.5 M trees).
+            std::mem::forget(w);
             ExitCode::SUCCESS
         }
         Err(e) => fail_survey(&e),

@@ -86,8 +86,7 @@ fn digits(v: f64) -> u64 {
 /// `1 − exp(−CAI)` for the crown area index CAI (the summed areas of the
 /// crowns' largest circles over the extent), the cover of randomly placed
 /// overlapping discs (the Boolean model of stochastic geometry).
-fn crown_cover(scene: &Scene) -> f64 {
-    let b = scene.bounds();
+fn crown_cover(scene: &Scene, b: Aabb) -> f64 {
     if b.is_empty() {
         return 0.0;
     }
@@ -162,10 +161,10 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
     let o = &survey.output;
     let f = &o.formats;
     let pulses: u64 = lines.iter().map(|l| survey.pulses_of(l)).sum();
-    let cover = crown_cover(scene);
+    let b = world.scene_bounds();
+    let cover = crown_cover(scene, b);
     let extra = EXTRA_RETURNS_UNDER_CROWNS.min(survey.detector.max_returns as f64 - 1.0);
     let per_pulse = 1.0 + cover * extra;
-    let b = scene.bounds();
     // Pulse slots in which a pulse leaves (a polygon's facets look
     // outside the field of view for part of each turn).
     let fired = survey.scanner.deflector.emitted_share();

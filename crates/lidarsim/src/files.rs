@@ -221,7 +221,7 @@ pub fn replayable_with_data(survey: &Survey) -> crate::survey::RawSurvey {
 /// (reproducible files) or today, echo attributes and error vector as extra
 /// bytes, the CRS; point format 6, uncompressed.
 pub fn las_settings(survey: &Survey, world: &World) -> LasSettings {
-    las_settings_for(survey, world.scene().bounds(), &world.lines)
+    las_settings_for(survey, world.scene_bounds(), &world.lines)
 }
 
 /// [`las_settings`] for a scene with bounds `b`.
@@ -273,7 +273,7 @@ pub fn las_settings_for(
 /// closest range a flight line comes to the top of the scene, `(Rn / R)²`
 /// (specification Eq. 2) — and at least 1.
 pub fn digitizer(survey: &Survey, world: &World) -> crate::output::Digitizer {
-    let top = world.scene().bounds();
+    let top = world.scene_bounds();
     let top_z = if top.is_empty() { 0.0 } else { top.max.z };
     let closest = world
         .lines

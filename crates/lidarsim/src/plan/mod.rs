@@ -177,7 +177,7 @@ pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
     let theta = s.deflector.max_off_nadir_rad();
     let mut out = Vec::new();
     let mut farthest: Option<(f64, u32)> = None;
-    let scene = caster.scene().bounds();
+    let scene = caster.scene_bounds();
     let mut missing = Vec::new();
     let mut swaths = Aabb::EMPTY;
     for (line, lp) in world.lines.iter().zip(&plan.lines) {

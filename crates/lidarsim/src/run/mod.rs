@@ -596,7 +596,7 @@ pub(crate) fn write_survey(survey: &Survey, out_dir: &Path) -> Result<String, Ru
 /// widened by half its swath and 10 m, within the scene's bounds (x, y).
 pub(crate) fn covered_area(world: &World, plan: &Plan) -> crate::geometry::Aabb {
     use crate::geometry::{Aabb, DVec3};
-    let scene = world.scene().bounds();
+    let scene = world.scene_bounds();
     let mut area = Aabb::EMPTY;
     for (line, lp) in world.lines.iter().zip(&plan.lines) {
         let m = DVec3::new(

@@ -8,7 +8,6 @@ use std::sync::Arc;
 use crate::accel::{Bvh, ground_below};
 use crate::geometry::{Aabb, DVec3};
 use crate::message::num;
-use crate::scene::Scene;
 use crate::sensor::navigation::LineErrors;
 use crate::sensor::platform::{Drift, FlightLine, Sway, plan_lines};
 use crate::survey::{KeyPath, MAX_LINE_HOURS, Survey};
@@ -128,7 +127,7 @@ pub(super) fn flight_lines(
 /// anywhere within range of the lines included.
 pub(super) fn check_las_scale(
     survey: &Survey,
-    scene: &Scene,
+    bounds: Aabb,
     lines: &[FlightLine],
     problems: &mut Vec<(KeyPath, String)>,
 ) {
@@ -137,7 +136,6 @@ pub(super) fn check_las_scale(
         return;
     }
     let las_scale_m = survey.output.las_scale_m;
-    let bounds = scene.bounds();
     let mut reach = if bounds.is_empty() {
         Aabb::EMPTY
     } else {

@@ -71,7 +71,7 @@ impl World {
         let mut problems: Vec<(KeyPath, String)> = Vec::new();
         let built = scene::build(survey, &mut problems);
         let lines = lines::flight_lines(survey, &built.index, &mut problems);
-        lines::check_las_scale(survey, built.index.scene(), &lines, &mut problems);
+        lines::check_las_scale(survey, built.index.scene_bounds(), &lines, &mut problems);
         if built.index.scene().primitives.is_empty() && problems.is_empty() {
             problems.push((
                 KeyPath::root(),
@@ -108,6 +108,12 @@ impl World {
     /// The scene, in the index's order.
     pub fn scene(&self) -> &Scene {
         self.index.scene()
+    }
+
+    /// The scene's bounding box ([`Scene::bounds`], kept from the index's
+    /// build: a scene of millions of primitives is not walked again).
+    pub fn scene_bounds(&self) -> crate::geometry::Aabb {
+        self.index.scene_bounds()
     }
 
     /// The survey's warnings followed by the world's.

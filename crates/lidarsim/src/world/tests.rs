@@ -121,6 +121,8 @@ fn terrain_example_loads_with_trees_on_the_terrain() {
     let s = Survey::load(&path).unwrap_or_else(|e| panic!("{e}"));
     let w = World::build(&s).unwrap_or_else(|e| panic!("{e}"));
     let b = w.scene().bounds();
+    // The bounds kept from the index's build are the scene's own.
+    assert_eq!(w.scene_bounds(), b);
     // The fBm terrain: extent [-300, -200, 300, 200] on a 2 m grid,
     // relief 35 m from z = 0; tree crowns reach higher.
     assert_eq!(

@@ -60,6 +60,7 @@ impl Bvh {
             stack_len: 0,
             origin,
             pad,
+            bounds,
         };
         // The binary tree: the root at 0, its descendants after it, each
         // subtree's within the room its primitive count bounds (a binary

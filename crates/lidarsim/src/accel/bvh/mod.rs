@@ -110,9 +110,17 @@ pub struct Bvh {
     origin: DVec3,
     /// Absolute padding of node boxes, m.
     pad: f64,
+    /// The scene's exact bounds ([`Scene::bounds`]).
+    bounds: Aabb,
 }
 
 impl Bvh {
+    /// The scene's bounding box, [`Scene::bounds`] without a pass over its
+    /// primitives (kept from the build).
+    pub fn scene_bounds(&self) -> Aabb {
+        self.bounds
+    }
+
     /// Node count, leaf count and depth.
     pub fn stats(&self) -> BvhStats {
         let mut s = BvhStats {
