@@ -93,15 +93,22 @@ pub fn run(args: RunArgs) -> ExitCode {
         Ok(loaded) => loaded,
         Err(e) => return fail_survey(&e),
     };
-    if let Some(part) = part {
-        return crate::parts::run_part(&survey, &world, &output, threads, part, overwrite);
-    }
-    let how = How {
-        resume: resuming,
-        overwrite,
-        no_space_check,
+    let code = match part {
+        Some(part) => crate::parts::run_part(&survey, &world, &output, threads, part, overwrite),
+        None => {
+            let how = How {
+                resume: resuming,
+                overwrite,
+                no_space_check,
+            };
+            simulate(&survey, &world, &output, threads, how)
+        }
     };
-    simulate(&survey, &world, &output, threads, how)
+    // The process ends here: its memory goes back whole, faster than the
+    // world's millions of primitives are dropped one by one (0.3 s for a
+    // stand of 1.5 M trees). Every file is written and closed by now.
+    std::mem::forget(world);
+    code
 }
 
 /// Test hook: `LIDARSIM_TEST_HOLD_AT_PULSE=N` makes a run wait, once N
