@@ -272,18 +272,16 @@ pub fn merge(
     // once the world is built: a merge that cannot build it leaves them.
     outdir::check_inputs(out_dir, &crate::files::input_files(&survey))?;
     let claimed = outdir::claim(out_dir, options.overwrite)?;
-    let joined_at = crate::output::AtomicFile::partial_of(&out_dir.join(PART_LAS));
+    let las_path = out_dir.join(PART_LAS);
     let build = || {
         World::build(&survey)
             .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string()))
     };
     let (world, joined) = if with_report {
         let files: Vec<PathBuf> = inputs.iter().map(|p| p.points.clone()).collect();
-        let path = out_dir.join(PART_LAS);
-        debug_assert_eq!(crate::output::AtomicFile::partial_of(&path), joined_at);
         let mut slots = 0;
         let mut joining = || {
-            join_las(&path, &files, taken == Parts::Take, |i| {
+            join_las(&las_path, &files, taken == Parts::Take, |i| {
                 slots += inputs[i].counts.pulse_slots;
                 (options.progress)(slots);
             })
@@ -301,7 +299,12 @@ pub fn merge(
     } else {
         (build()?, None)
     };
-    claimed.clear(joined.is_some().then_some(joined_at.as_path()))?;
+    // The file being joined is the one an earlier run's files may not
+    // take with them.
+    let joining = joined
+        .is_some()
+        .then(|| crate::output::AtomicFile::partial_of(&las_path));
+    claimed.clear(joining.as_deref())?;
     for (dir, r) in &parts {
         if r.ranges != part_ranges(&survey, &world, r.part, n) {
             return Err(error(

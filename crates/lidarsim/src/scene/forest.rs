@@ -8,7 +8,7 @@
 //! ([`Scene::add_stand`]).
 
 use super::tree::TreeSpec;
-use super::{MaterialId, Primitive, Scene, SceneObject, Shape, Species, SurfaceClass};
+use super::{MaterialId, Scene, SceneObject, Species, tree_part};
 use crate::geometry::DVec3;
 use crate::rng::{Purpose, Stream};
 use rayon::prelude::*;
@@ -119,26 +119,21 @@ impl Scene {
     /// ([`SceneObject::StandTree`]).
     pub fn add_stand(&mut self, forest: usize, trees: &[TreeSpec], whorl_spacing_m: f64) {
         // The materials, in the order add_tree would add them; a stand has
-        // a few, shared by its trees.
+        // a few, shared by its trees: looked up again only when a tree's
+        // differ from the last one's.
         let mut materials: Vec<(MaterialId, MaterialId)> = Vec::with_capacity(trees.len());
-        let mut last: Option<(Species, u64, u64, (MaterialId, MaterialId))> = None;
+        let mut last: Option<(&TreeSpec, (MaterialId, MaterialId))> = None;
         for t in trees {
-            let key = (
-                t.species,
-                t.bark_reflectance.to_bits(),
-                t.foliage_reflectance.to_bits(),
-            );
             let ids = match last {
-                Some((s, b, f, ids)) if (s, b, f) == key => ids,
-                _ => {
-                    let name = t.species.name();
-                    let bark = self.add_named_material(name, " bark", t.bark_reflectance, 1.0);
-                    let foliage =
-                        self.add_named_material(name, " foliage", t.foliage_reflectance, 0.0);
-                    (bark, foliage)
+                Some((l, ids))
+                    if (l.species, l.bark_reflectance, l.foliage_reflectance)
+                        == (t.species, t.bark_reflectance, t.foliage_reflectance) =>
+                {
+                    ids
                 }
+                _ => self.tree_materials(t),
             };
-            last = Some((key.0, key.1, key.2, ids));
+            last = Some((t, ids));
             materials.push(ids);
         }
         let first_object = self.objects.len();
@@ -148,18 +143,14 @@ impl Scene {
                 tree: tree as u32,
             }));
         let stand = (0..2 * trees.len()).into_par_iter().map(|k| {
-            let (t, (bark, foliage)) = (&trees[k / 2], materials[k / 2]);
-            let (shape, material) = if k % 2 == 0 {
-                (Shape::Trunk(t.trunk()), bark)
-            } else {
-                (Shape::Crown(Box::new(t.crown(whorl_spacing_m))), foliage)
-            };
-            Primitive {
-                shape,
-                material,
-                class: SurfaceClass::Vegetation,
-                object: (first_object + k / 2) as u32,
-            }
+            let object = (first_object + k / 2) as u32;
+            tree_part(
+                &trees[k / 2],
+                k % 2 == 1,
+                materials[k / 2],
+                object,
+                whorl_spacing_m,
+            )
         });
         self.primitives.par_extend(stand);
     }

@@ -389,27 +389,25 @@ impl Scene {
     /// (a volume, foliage; no incidence term), both of class vegetation.
     pub fn add_tree(&mut self, tree: &TreeSpec, whorl_spacing_m: f64, name: impl Into<String>) {
         let object = self.add_object(name);
+        let materials = self.tree_materials(tree);
+        for crown in [false, true] {
+            let part = tree_part(tree, crown, materials, object, whorl_spacing_m);
+            self.primitives.push(part);
+        }
+    }
+
+    /// The ids of a tree's bark and foliage materials, added if new.
+    pub(crate) fn tree_materials(&mut self, tree: &TreeSpec) -> (MaterialId, MaterialId) {
         let species = tree.species.name();
         let bark = self.add_named_material(species, " bark", tree.bark_reflectance, 1.0);
         let foliage = self.add_named_material(species, " foliage", tree.foliage_reflectance, 0.0);
-        self.primitives.push(Primitive {
-            shape: Shape::Trunk(tree.trunk()),
-            material: bark,
-            class: SurfaceClass::Vegetation,
-            object,
-        });
-        self.primitives.push(Primitive {
-            shape: Shape::Crown(Box::new(tree.crown(whorl_spacing_m))),
-            material: foliage,
-            class: SurfaceClass::Vegetation,
-            object,
-        });
+        (bark, foliage)
     }
 
     /// [`Scene::add_material`] for the material named `prefix` + `suffix`,
     /// without building the name when the material is there already (a
     /// stand adds the same few materials for every tree).
-    pub(crate) fn add_named_material(
+    fn add_named_material(
         &mut self,
         prefix: &str,
         suffix: &str,
@@ -439,6 +437,29 @@ impl Scene {
     pub fn add_object(&mut self, name: impl Into<String>) -> ObjectId {
         self.objects.push(SceneObject::Named(name.into()));
         (self.objects.len() - 1) as ObjectId
+    }
+}
+
+/// The trunk of `tree` (bark) or, with `crown`, its crown (foliage), of
+/// object `object`, `materials` being its bark and foliage: a tree's two
+/// primitives, as [`Scene::add_tree`] and [`Scene::add_stand`] make them.
+pub(crate) fn tree_part(
+    tree: &TreeSpec,
+    crown: bool,
+    (bark, foliage): (MaterialId, MaterialId),
+    object: ObjectId,
+    whorl_spacing_m: f64,
+) -> Primitive {
+    let (shape, material) = if crown {
+        (Shape::Crown(Box::new(tree.crown(whorl_spacing_m))), foliage)
+    } else {
+        (Shape::Trunk(tree.trunk()), bark)
+    };
+    Primitive {
+        shape,
+        material,
+        class: SurfaceClass::Vegetation,
+        object,
     }
 }
 

@@ -143,7 +143,7 @@ fn scene_with_trees(seed: u64) -> Scene {
 /// The in-place reordering puts at `i` the item `order[i]` named, for
 /// permutations of every cycle structure.
 #[test]
-fn reordering_in_place_follows_the_order() {
+fn leaf_order_gathers_the_named_elements() {
     let mut s = crate::rng::Stream::new(3, 0, 0, crate::rng::Purpose::Test);
     for n in [0usize, 1, 2, 3, 10, 257] {
         for _ in 0..20 {
