@@ -8,19 +8,87 @@ use super::{BINS, Bvh, MAX_LEAF, Node, PARALLEL_DEPTH, PARALLEL_MIN, WIDTH, Wide
 use crate::geometry::{Aabb, DVec3};
 use crate::scene::Scene;
 
-/// A primitive's box and its number in the scene. The build partitions
-/// these themselves, not indices into them: each pass then reads memory in
-/// order (the swaps are the ones an index partition would make, so the tree
-/// is the same).
+/// A box in the hierarchy's frame: `f32`, relative to the scene origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Box32 {
+    lo: [f32; 3],
+    hi: [f32; 3],
+}
+
+/// The smaller of two `f32` that are not NaN (a plain comparison, which
+/// compiles to one instruction, where `f32::min` also handles NaN).
+#[inline(always)]
+fn min32(a: f32, b: f32) -> f32 {
+    if b < a { b } else { a }
+}
+
+/// The larger of two `f32` that are not NaN.
+#[inline(always)]
+fn max32(a: f32, b: f32) -> f32 {
+    if b > a { b } else { a }
+}
+
+impl Box32 {
+    /// The empty box (the identity of [`Box32::union`]).
+    const EMPTY: Self = Self {
+        lo: [f32::INFINITY; 3],
+        hi: [f32::NEG_INFINITY; 3],
+    };
+
+    #[inline(always)]
+    fn union(self, o: Self) -> Self {
+        Self {
+            lo: [0, 1, 2].map(|a| min32(self.lo[a], o.lo[a])),
+            hi: [0, 1, 2].map(|a| max32(self.hi[a], o.hi[a])),
+        }
+    }
+
+    /// This box grown to hold the point `p`.
+    #[inline(always)]
+    fn union_point(self, p: [f32; 3]) -> Self {
+        Self {
+            lo: [0, 1, 2].map(|a| min32(self.lo[a], p[a])),
+            hi: [0, 1, 2].map(|a| max32(self.hi[a], p[a])),
+        }
+    }
+
+    /// Half the surface area (the heuristic compares ratios of areas);
+    /// 0 for the empty box.
+    fn half_area(&self) -> f64 {
+        let e = [0, 1, 2].map(|a| f64::from(self.hi[a]) - f64::from(self.lo[a]));
+        if e.iter().any(|&x| x < 0.0) {
+            return 0.0;
+        }
+        e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
+    }
+}
+
+/// A primitive's box in the hierarchy's frame — the `f64` box relative to
+/// the origin, padded and rounded outwards ([`Bvh::frame_box`]) — and its
+/// number in the scene. The build partitions these themselves, not
+/// indices into them: each pass then reads memory in order, 28 bytes a
+/// primitive.
+#[derive(Clone, Copy, Debug)]
+#[repr(C)]
 struct BuildPrim {
-    bounds: Aabb,
+    lo: [f32; 3],
     index: u32,
+    hi: [f32; 3],
 }
 
 impl BuildPrim {
-    #[inline]
-    fn centroid(&self) -> DVec3 {
-        self.bounds.center()
+    #[inline(always)]
+    fn bounds(&self) -> Box32 {
+        Box32 {
+            lo: self.lo,
+            hi: self.hi,
+        }
+    }
+
+    /// Twice the box's centre (the binning only compares centroids).
+    #[inline(always)]
+    fn centroid2(&self) -> [f32; 3] {
+        [0, 1, 2].map(|a| self.lo[a] + self.hi[a])
     }
 }
 
@@ -29,18 +97,14 @@ impl Bvh {
     /// primitives reordered so that each leaf's are adjacent: the primitive
     /// numbers of hits index [`crate::accel::RayCaster::scene`], not the scene given.
     pub fn build(scene: Scene) -> Self {
-        // The primitives' boxes on all threads; the scene's box from them
-        // ([`Scene::bounds`], the same unions in the same order).
-        let mut prims: Vec<BuildPrim> = scene
+        // The scene's box ([`Scene::bounds`]: unions are exact, so their
+        // order does not matter), then the primitives' boxes in the
+        // frame it sets, both on all threads.
+        let bounds = scene
             .primitives
             .par_iter()
-            .enumerate()
-            .map(|(i, p)| BuildPrim {
-                bounds: p.bounds(),
-                index: i as u32,
-            })
-            .collect();
-        let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
+            .map(|p| p.bounds())
+            .reduce(|| Aabb::EMPTY, Aabb::union);
         let origin = if bounds.is_empty() {
             DVec3::ZERO
         } else {
@@ -62,6 +126,19 @@ impl Bvh {
             pad,
             bounds,
         };
+        let mut prims: Vec<BuildPrim> = scene
+            .primitives
+            .par_iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let b = bvh.frame_box(p.bounds());
+                BuildPrim {
+                    lo: b.lo,
+                    index: i as u32,
+                    hi: b.hi,
+                }
+            })
+            .collect();
         // The binary tree: the root at 0, its descendants after it, each
         // subtree's within the room its primitive count bounds (a binary
         // tree over n primitives has at most 2n − 1 nodes), so that the
@@ -69,7 +146,7 @@ impl Bvh {
         let mut nodes = zeroed_nodes((2 * prims.len()).saturating_sub(1));
         let mut used = 0;
         if let Some((root, desc)) = nodes.split_first_mut() {
-            let (r, n) = bvh.subtree(&mut prims, 0, 0, desc, 1);
+            let (r, n) = subtree(&mut prims, 0, 0, desc, 1);
             *root = r;
             used = 1 + n;
         }
@@ -85,106 +162,115 @@ impl Bvh {
         bvh
     }
 
-    /// The leaf node over all of `prims`, whose first primitive is at
-    /// `first` in the whole order.
-    fn leaf_node(&self, prims: &[BuildPrim], first: usize) -> Node {
-        let b = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
-        self.node_over(b, 0, prims.len(), first)
-    }
-
-    /// The leaf node with box `b` over `count` primitives from `first + at`
-    /// in the whole order.
-    fn node_over(&self, b: Aabb, at: usize, count: usize, first: usize) -> Node {
+    /// The box `b` in the hierarchy's frame: relative to the origin,
+    /// padded, rounded outwards to `f32`. A node's box is the union of its
+    /// primitives' boxes in this frame, which is this of the union of
+    /// their `f64` boxes (the subtraction and the rounding are monotone).
+    fn frame_box(&self, b: Aabb) -> Box32 {
         let lo = b.min - self.origin - DVec3::splat(self.pad);
         let hi = b.max - self.origin + DVec3::splat(self.pad);
-        Node {
-            min: [down(lo.x), down(lo.y), down(lo.z)],
-            left_or_first: (first + at) as u32,
-            max: [up(hi.x), up(hi.y), up(hi.z)],
-            count: count as u32,
+        Box32 {
+            lo: [down(lo.x), down(lo.y), down(lo.z)],
+            hi: [up(hi.x), up(hi.y), up(hi.z)],
         }
     }
+}
 
-    /// Builds the subtree over `prims` (whose first element is at `first`
-    /// in the whole order), reordering them. Returns its root and how many nodes it used in
-    /// `desc`, which receives its other nodes (room for `2·len − 2`; its
-    /// first element is node `base` of the whole array, child indices
-    /// count from the start of that array). The two halves of the top
-    /// levels are built in parallel into their own parts of `desc`; the
-    /// tree is the same as a sequential build's.
-    fn subtree(
-        &self,
-        prims: &mut [BuildPrim],
-        first: usize,
-        depth: usize,
-        desc: &mut [Node],
-        base: usize,
-    ) -> (Node, usize) {
-        let count = prims.len();
-        let mut root = self.leaf_node(prims, first);
-        if depth >= PARALLEL_DEPTH || count < PARALLEL_MIN {
-            let used = self.sequential(prims, first, &mut root, desc, base);
-            return (root, used);
-        }
-        let Some((mid, _)) = split(prims) else {
-            return (root, 0);
+/// The leaf node over all of `prims`, whose first primitive is at `first`
+/// in the whole order.
+fn leaf_node(prims: &[BuildPrim], first: usize) -> Node {
+    let b = prims.iter().fold(Box32::EMPTY, |b, p| b.union(p.bounds()));
+    node_over(b, 0, prims.len(), first)
+}
+
+/// The leaf node with box `b` over `count` primitives from `first + at` in
+/// the whole order.
+fn node_over(b: Box32, at: usize, count: usize, first: usize) -> Node {
+    Node {
+        min: b.lo,
+        left_or_first: (first + at) as u32,
+        max: b.hi,
+        count: count as u32,
+    }
+}
+
+/// Builds the subtree over `prims` (whose first element is at `first`
+/// in the whole order), reordering them. Returns its root and how many nodes it used in
+/// `desc`, which receives its other nodes (room for `2·len − 2`; its
+/// first element is node `base` of the whole array, child indices
+/// count from the start of that array). The two halves of the top
+/// levels are built in parallel into their own parts of `desc`; the
+/// tree is the same as a sequential build's.
+fn subtree(
+    prims: &mut [BuildPrim],
+    first: usize,
+    depth: usize,
+    desc: &mut [Node],
+    base: usize,
+) -> (Node, usize) {
+    let count = prims.len();
+    let mut root = leaf_node(prims, first);
+    if depth >= PARALLEL_DEPTH || count < PARALLEL_MIN {
+        let used = sequential(prims, first, &mut root, desc, base);
+        return (root, used);
+    }
+    let Some((mid, _)) = split(prims) else {
+        return (root, 0);
+    };
+    let (lo, hi) = prims.split_at_mut(mid);
+    // Layout: the two children, then room for the left's descendants,
+    // then for the right's.
+    let (pair, rest) = desc.split_at_mut(2);
+    let (ldesc, rdesc) = rest.split_at_mut(2 * mid - 2);
+    let (lbase, rbase) = (base + 2, base + 2 + ldesc.len());
+    let ((lroot, lused), (rroot, rused)) = rayon::join(
+        || subtree(lo, first, depth + 1, ldesc, lbase),
+        || subtree(hi, first + mid, depth + 1, rdesc, rbase),
+    );
+    pair[0] = lroot;
+    pair[1] = rroot;
+    root.left_or_first = base as u32;
+    root.count = 0;
+    (root, 2 + lused + rused)
+}
+
+/// Sequential binned-SAH build below `root` (a leaf over all of
+/// `prims`, which may become interior); descendants go to the front of
+/// `desc` (node `base` of the whole array). Returns how many.
+fn sequential(
+    prims: &mut [BuildPrim],
+    first: usize,
+    root: &mut Node,
+    desc: &mut [Node],
+    base: usize,
+) -> usize {
+    let mut used = 0;
+    // Work items: (node, None) for the root, (index in desc) otherwise.
+    let mut work: Vec<Option<usize>> = vec![None];
+    while let Some(item) = work.pop() {
+        let node = match item {
+            None => *root,
+            Some(i) => desc[i],
         };
-        let (lo, hi) = prims.split_at_mut(mid);
-        // Layout: the two children, then room for the left's descendants,
-        // then for the right's.
-        let (pair, rest) = desc.split_at_mut(2);
-        let (ldesc, rdesc) = rest.split_at_mut(2 * mid - 2);
-        let (lbase, rbase) = (base + 2, base + 2 + ldesc.len());
-        let ((lroot, lused), (rroot, rused)) = rayon::join(
-            || self.subtree(lo, first, depth + 1, ldesc, lbase),
-            || self.subtree(hi, first + mid, depth + 1, rdesc, rbase),
-        );
-        pair[0] = lroot;
-        pair[1] = rroot;
-        root.left_or_first = base as u32;
-        root.count = 0;
-        (root, 2 + lused + rused)
-    }
-
-    /// Sequential binned-SAH build below `root` (a leaf over all of
-    /// `prims`, which may become interior); descendants go to the front of
-    /// `desc` (node `base` of the whole array). Returns how many.
-    fn sequential(
-        &self,
-        prims: &mut [BuildPrim],
-        first: usize,
-        root: &mut Node,
-        desc: &mut [Node],
-        base: usize,
-    ) -> usize {
-        let mut used = 0;
-        // Work items: (node, None) for the root, (index in desc) otherwise.
-        let mut work: Vec<Option<usize>> = vec![None];
-        while let Some(item) = work.pop() {
-            let node = match item {
-                None => *root,
-                Some(i) => desc[i],
+        let at = node.left_or_first as usize - first;
+        let count = node.count as usize;
+        if let Some((mid, halves)) = split(&mut prims[at..at + count]) {
+            let left = used;
+            let (l, r) = halves;
+            desc[left] = node_over(l, at, mid, first);
+            desc[left + 1] = node_over(r, at + mid, count - mid, first);
+            used += 2;
+            let parent = match item {
+                None => &mut *root,
+                Some(i) => &mut desc[i],
             };
-            let at = node.left_or_first as usize - first;
-            let count = node.count as usize;
-            if let Some((mid, halves)) = split(&mut prims[at..at + count]) {
-                let left = used;
-                let (l, r) = halves;
-                desc[left] = self.node_over(l, at, mid, first);
-                desc[left + 1] = self.node_over(r, at + mid, count - mid, first);
-                used += 2;
-                let parent = match item {
-                    None => &mut *root,
-                    Some(i) => &mut desc[i],
-                };
-                parent.left_or_first = (base + left) as u32;
-                parent.count = 0;
-                work.push(Some(left));
-                work.push(Some(left + 1));
-            }
+            parent.left_or_first = (base + left) as u32;
+            parent.count = 0;
+            work.push(Some(left));
+            work.push(Some(left + 1));
         }
-        used
     }
+    used
 }
 
 /// `prims` in leaf order: the `i`-th of the result is `prims[order[i]]`
@@ -340,32 +426,29 @@ pub(super) fn up(x: f64) -> f32 {
 /// left part and the bounds of the two parts (from the bins: the union of
 /// their bins' boxes is the union of their primitives'), or `None` when the
 /// node should stay a leaf.
-fn split(items: &mut [BuildPrim]) -> Option<(usize, (Aabb, Aabb))> {
+fn split(items: &mut [BuildPrim]) -> Option<(usize, (Box32, Box32))> {
     let n = items.len();
     if n <= MAX_LEAF {
         return None;
     }
     // One pass for the bounds of the centroids and of the node, one for
     // the bins of all three axes.
-    let (cb, nb) = items.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(c, b), p| {
-        (c.union_point(p.centroid()), b.union(p.bounds))
-    });
-    let node_area = nb.surface_area();
-    let ext = cb.extent();
-    let scale = [0, 1, 2].map(|a| {
-        if ext[a] > 0.0 {
-            BINS as f64 / ext[a]
-        } else {
-            0.0
-        }
-    });
-    let mut boxes = [[Aabb::EMPTY; BINS]; 3];
-    let mut counts = [[0usize; BINS]; 3];
+    let (cb, nb) = items
+        .iter()
+        .fold((Box32::EMPTY, Box32::EMPTY), |(c, b), p| {
+            (c.union_point(p.centroid2()), b.union(p.bounds()))
+        });
+    let node_area = nb.half_area();
+    let ext = [0, 1, 2].map(|a| cb.hi[a] - cb.lo[a]);
+    let scale = ext.map(|e| if e > 0.0 { BINS as f32 / e } else { 0.0 });
+    let bin_of = |c: f32, axis: usize| (((c - cb.lo[axis]) * scale[axis]) as usize).min(BINS - 1);
+    let mut boxes = [[Box32::EMPTY; BINS]; 3];
+    let mut counts = [[0u32; BINS]; 3];
     for p in items.iter() {
-        let c = p.centroid();
+        let c = p.centroid2();
         for axis in 0..3 {
-            let b = (((c[axis] - cb.min[axis]) * scale[axis]) as usize).min(BINS - 1);
-            boxes[axis][b] = boxes[axis][b].union(p.bounds);
+            let b = bin_of(c[axis], axis);
+            boxes[axis][b] = boxes[axis][b].union(p.bounds());
             counts[axis][b] += 1;
         }
     }
@@ -377,23 +460,23 @@ fn split(items: &mut [BuildPrim]) -> Option<(usize, (Aabb, Aabb))> {
         let (boxes, counts) = (&boxes[axis], &counts[axis]);
         // Sweep from the right to get the right-hand areas and counts.
         let mut right_area = [0.0; BINS];
-        let mut right_count = [0usize; BINS];
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
+        let mut right_count = [0u32; BINS];
+        let (mut acc, mut cnt) = (Box32::EMPTY, 0);
         for b in (1..BINS).rev() {
             acc = acc.union(boxes[b]);
             cnt += counts[b];
-            right_area[b] = acc.surface_area();
+            right_area[b] = acc.half_area();
             right_count[b] = cnt;
         }
-        let (mut acc, mut cnt) = (Aabb::EMPTY, 0);
+        let (mut acc, mut cnt) = (Box32::EMPTY, 0);
         for b in 0..BINS - 1 {
             acc = acc.union(boxes[b]);
             cnt += counts[b];
             if cnt == 0 || right_count[b + 1] == 0 {
                 continue;
             }
-            let cost =
-                acc.surface_area() * cnt as f64 + right_area[b + 1] * right_count[b + 1] as f64;
+            let cost = acc.half_area() * f64::from(cnt)
+                + right_area[b + 1] * f64::from(right_count[b + 1]);
             if best.is_none_or(|(c, _, _)| cost < c) {
                 best = Some((cost, axis, b));
             }
@@ -406,16 +489,13 @@ fn split(items: &mut [BuildPrim]) -> Option<(usize, (Aabb, Aabb))> {
             if cost >= leaf_cost && n <= 2 * MAX_LEAF {
                 return None;
             }
-            let scale = scale[axis];
-            let goes_left = |p: &BuildPrim| {
-                let c = p.centroid()[axis];
-                ((((c - cb.min[axis]) * scale) as usize).min(BINS - 1)) <= bin
-            };
-            let mid = partition(items, goes_left);
+            let mid = partition(items, |p| bin_of(p.centroid2()[axis], axis) <= bin);
             let bins = &boxes[axis];
             let halves = (
-                bins[..=bin].iter().fold(Aabb::EMPTY, |a, b| a.union(*b)),
-                bins[bin + 1..].iter().fold(Aabb::EMPTY, |a, b| a.union(*b)),
+                bins[..=bin].iter().fold(Box32::EMPTY, |a, b| a.union(*b)),
+                bins[bin + 1..]
+                    .iter()
+                    .fold(Box32::EMPTY, |a, b| a.union(*b)),
             );
             (mid > 0 && mid < n).then_some((mid, halves))
         }
@@ -423,7 +503,7 @@ fn split(items: &mut [BuildPrim]) -> Option<(usize, (Aabb, Aabb))> {
         // stay small.
         None => {
             let bounds =
-                |part: &[BuildPrim]| part.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds));
+                |part: &[BuildPrim]| part.iter().fold(Box32::EMPTY, |b, p| b.union(p.bounds()));
             Some((n / 2, (bounds(&items[..n / 2]), bounds(&items[n / 2..]))))
         }
     }

@@ -87,6 +87,36 @@ fn parallel_build_is_valid_and_finds_every_hit() {
     assert!(hits > 500, "{hits}");
 }
 
+/// A leaf's box is the tightest padded `f32` box around the `f64` union of
+/// its primitives' boxes, though the build unites boxes already rounded
+/// to `f32` one primitive at a time.
+#[test]
+fn leaf_boxes_are_the_rounded_union_of_their_primitives() {
+    let bvh = Bvh::build(scene_with_trees(5));
+    let pad = DVec3::splat(bvh.pad);
+    let mut leaves = 0;
+    for node in &bvh.nodes {
+        for slot in (0..WIDTH).filter(|&s| node.count[s] > 0) {
+            let first = node.child[slot] as usize;
+            let prims = &bvh.scene.primitives[first..first + node.count[slot] as usize];
+            let union = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds()));
+            let (lo, hi) = (union.min - bvh.origin - pad, union.max - bvh.origin + pad);
+            let want = [
+                down(lo.x),
+                down(lo.y),
+                down(lo.z),
+                up(hi.x),
+                up(hi.y),
+                up(hi.z),
+            ];
+            let got = [0, 1, 2, 3, 4, 5].map(|row| node.planes[row][slot]);
+            assert_eq!(got, want, "leaf at {first}");
+            leaves += 1;
+        }
+    }
+    assert!(leaves > 10, "{leaves}");
+}
+
 /// A triangle soup with trees standing in it.
 /// Triangles, and horizontal rectangles (polygons, which carry no
 /// normal from the bundle test) at random heights, some of them tilted.
