@@ -71,6 +71,7 @@ pub mod files;
 pub mod geometry;
 pub mod io;
 pub mod kernels;
+pub mod memory;
 pub mod message;
 pub mod output;
 pub mod plan;

@@ -80,7 +80,7 @@ pub fn generate(spec: &ForestSpec, ground_z: &(dyn Fn(f64, f64) -> f64 + Sync)) 
     }
     let mut rng = Stream::new(spec.seed, 0, 0, Purpose::Forest);
     let mut grid = SpacingGrid::new(spec.min_spacing_m, [x0, y0, x1, y1]);
-    let mut stems: Vec<[f64; 2]> = Vec::with_capacity(wanted);
+    let mut stems: Vec<[f64; 2]> = crate::memory::huge_vec(wanted);
     let mut draws: Vec<Stream> = Vec::with_capacity(wanted);
     let mut attempts = 0usize;
     while stems.len() < wanted && attempts < 50 * wanted + 1000 {
@@ -229,7 +229,11 @@ impl SpacingGrid {
         let nx = ((x1 - x0) / cell).ceil().clamp(0.0, 1e15) as usize + 1;
         let ny = ((y1 - y0) / cell).ceil().clamp(0.0, 1e15) as usize + 1;
         let cells = match nx.checked_mul(ny) {
-            Some(n) if n <= Self::FLAT_MAX => Cells::Flat(vec![Self::EMPTY; n]),
+            Some(n) if n <= Self::FLAT_MAX => {
+                let mut v = crate::memory::huge_vec(n);
+                v.resize(n, Self::EMPTY);
+                Cells::Flat(v)
+            }
             _ => Cells::Sparse(Default::default()),
         };
         Some(Self {
