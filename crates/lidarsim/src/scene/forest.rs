@@ -106,9 +106,9 @@ pub fn generate(spec: &ForestSpec, ground_z: &(dyn Fn(f64, f64) -> f64 + Sync)) 
     }
     drop(grid);
     stems
-        .into_par_iter()
-        .zip(draws)
-        .map(|([x, y], mut rng)| tree_at(spec, x, y, ground_z(x, y), &mut rng))
+        .par_chunks(TREE_BATCH)
+        .zip(draws.par_chunks_mut(TREE_BATCH))
+        .flat_map_iter(|(stems, draws)| trees_at(spec, stems, draws, ground_z))
         .collect()
 }
 
@@ -160,10 +160,53 @@ impl Scene {
 /// crown ratio, seed).
 const DRAWS_PER_TREE: u64 = 4;
 
-/// The tree whose stem stands at `(x, y, z)`, its attributes drawn from
-/// `rng` ([`DRAWS_PER_TREE`] numbers).
-fn tree_at(spec: &ForestSpec, x: f64, y: f64, z: f64, rng: &mut Stream) -> TreeSpec {
-    // Species by weight.
+/// Trees whose attributes are worked out together: their dbh bisections
+/// run side by side ([`Species::dbh_from_heights_m`]).
+const TREE_BATCH: usize = 16;
+
+/// The trees whose stems stand at `stems` (at most [`TREE_BATCH`]), each
+/// with its attributes drawn from its stream in `draws`
+/// ([`DRAWS_PER_TREE`] numbers): species, height, crown ratio, seed.
+fn trees_at<'a>(
+    spec: &'a ForestSpec,
+    stems: &'a [[f64; 2]],
+    draws: &'a mut [Stream],
+    ground_z: &'a (dyn Fn(f64, f64) -> f64 + Sync),
+) -> impl Iterator<Item = TreeSpec> + 'a {
+    let n = stems.len();
+    let mut drawn = [(spec.mix[0].0, 0.0); TREE_BATCH];
+    for (d, rng) in drawn.iter_mut().zip(draws.iter_mut()) {
+        *d = species_and_height(spec, rng);
+    }
+    // Lanes past `n` repeat the first tree; their answers are dropped.
+    for k in n..TREE_BATCH {
+        drawn[k] = drawn[0];
+    }
+    let dbh = Species::dbh_from_heights_m(drawn);
+    (0..n).map(move |k| {
+        let [x, y] = stems[k];
+        let (species, height) = drawn[k];
+        // Heights beyond what the height curve gives over its dbh range
+        // take the nearest end of that range.
+        let (d_lo, d_hi) = Species::DBH_RANGE_M;
+        let dbh = dbh[k].unwrap_or(if height < species.height_from_dbh_m(d_lo) {
+            d_lo
+        } else {
+            d_hi
+        });
+        let rng = &mut draws[k];
+        let ratio = species.preset().crown_ratio * (0.85 + 0.3 * rng.uniform());
+        let crown_base = height * (1.0 - ratio.min(0.95));
+        let base = DVec3::new(x, y, ground_z(x, y));
+        let mut tree = TreeSpec::new(base, species, dbh, height, crown_base);
+        tree.seed = rng.next_u64();
+        tree
+    })
+}
+
+/// A tree's species, by the mix's weights, and its height: the first two
+/// numbers of its stream.
+fn species_and_height(spec: &ForestSpec, rng: &mut Stream) -> (Species, f64) {
     let total_weight: f64 = spec.mix.iter().map(|(_, w)| w).sum();
     let mut pick = rng.uniform() * total_weight;
     let mut species = spec.mix[0].0;
@@ -175,24 +218,7 @@ fn tree_at(spec: &ForestSpec, x: f64, y: f64, z: f64, rng: &mut Stream) -> TreeS
         pick -= w;
     }
     let (h0, h1) = spec.height_range_m;
-    let height = h0 + rng.uniform() * (h1 - h0);
-    let preset = species.preset();
-    // Heights beyond what the height curve gives over its dbh range take
-    // the nearest end of that range.
-    let (d_lo, d_hi) = Species::DBH_RANGE_M;
-    let dbh =
-        species
-            .dbh_from_height_m(height)
-            .unwrap_or(if height < species.height_from_dbh_m(d_lo) {
-                d_lo
-            } else {
-                d_hi
-            });
-    let ratio = preset.crown_ratio * (0.85 + 0.3 * rng.uniform());
-    let crown_base = height * (1.0 - ratio.min(0.95));
-    let mut tree = TreeSpec::new(DVec3::new(x, y, z), species, dbh, height, crown_base);
-    tree.seed = rng.next_u64();
-    tree
+    (species, h0 + rng.uniform() * (h1 - h0))
 }
 
 /// The stems placed so far, by cells whose diagonal is the minimum spacing:

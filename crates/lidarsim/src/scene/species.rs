@@ -143,29 +143,56 @@ impl Species {
     /// the curve: the same answer as evaluating it at every one. Heights
     /// outside the curve's range over those diameters give `None`.
     pub fn dbh_from_height_m(self, height_m: f64) -> Option<f64> {
-        let (mut lo, mut hi) = Self::DBH_RANGE_M;
-        if height_m < self.height_from_dbh_m(lo) || height_m > self.height_from_dbh_m(hi) {
-            return None;
-        }
+        let [dbh] = Self::dbh_from_heights_m([(self, height_m)]);
+        dbh
+    }
+
+    /// [`Species::dbh_from_height_m`] of `N` trees at once, each its
+    /// answer to the bit: their bisections are independent chains of
+    /// dependent steps, and run side by side they overlap in the processor.
+    pub fn dbh_from_heights_m<const N: usize>(trees: [(Species, f64); N]) -> [Option<f64>; N] {
+        let (d_lo, d_hi) = Self::DBH_RANGE_M;
+        let reached =
+            trees.map(|(s, h)| h >= s.height_from_dbh_m(d_lo) && h <= s.height_from_dbh_m(d_hi));
         // H = a / (1 + b1/d + b2/d²) with d in cm: b2·u² + b1·u + c = 0 for
         // u = 1/d and c = 1 − a/H < 0; its positive root, in the form
         // without cancellation.
-        let p = self.preset();
-        let c = 1.0 - p.height_a_m / height_m;
-        let root = (p.height_b1 * p.height_b1 - 4.0 * p.height_b2 * c).sqrt();
-        let d = 0.01 * (p.height_b1 + root) / (-2.0 * c);
-        let margin = 1e-10 * d;
+        let closed = trees.map(|(s, h)| {
+            let p = s.preset();
+            let c = 1.0 - p.height_a_m / h;
+            let root = (p.height_b1 * p.height_b1 - 4.0 * p.height_b2 * c).sqrt();
+            0.01 * (p.height_b1 + root) / (-2.0 * c)
+        });
+        let height = trees.map(|(_, h)| h);
+        let margin = closed.map(|d| 1e-10 * d);
+        let coeffs = trees.map(|(s, _)| {
+            let p = s.preset();
+            (p.height_a_m, p.height_b1, p.height_b2)
+        });
+        // Every step is the same operations on all lanes (they vectorise);
+        // the curve is evaluated, for all of them, only in the steps where
+        // some lane's midpoint is within the margin: the last few.
+        let (mut lo, mut hi) = ([d_lo; N], [d_hi; N]);
         for _ in 0..80 {
-            let mid = 0.5 * (lo + hi);
-            // A choice of values, not of branches, where the side is known
-            // (the side is as good as random from step to step).
-            let below = if (mid - d).abs() > margin {
-                mid < d
-            } else {
-                self.height_from_dbh_m(mid) < height_m
-            };
-            let (l, h) = (if below { mid } else { lo }, if below { hi } else { mid });
-            // Once the interval stops changing it never changes again (the
+            let mid: [f64; N] = std::array::from_fn(|k| 0.5 * (lo[k] + hi[k]));
+            let near: [bool; N] = std::array::from_fn(|k| (mid[k] - closed[k]).abs() <= margin[k]);
+            let mut below: [bool; N] = std::array::from_fn(|k| mid[k] < closed[k]);
+            if near.iter().any(|&n| n) {
+                // [`Species::height_from_dbh_m`], operation for operation.
+                let curve: [f64; N] = std::array::from_fn(|k| {
+                    let (a, b1, b2) = coeffs[k];
+                    let d = mid[k] * 100.0;
+                    a / (1.0 + b1 / d + b2 / (d * d))
+                });
+                for k in 0..N {
+                    below[k] = select_bool(near[k], curve[k] < height[k], below[k]);
+                }
+            }
+            // The side is as good as random from step to step: the new
+            // ends are chosen by a mask, not a branch.
+            let l: [f64; N] = std::array::from_fn(|k| select(below[k], mid[k], lo[k]));
+            let h: [f64; N] = std::array::from_fn(|k| select(below[k], hi[k], mid[k]));
+            // Once an interval stops changing it never changes again (the
             // step depends on it alone): the same answer as all 80 steps,
             // after about 55.
             if (l, h) == (lo, hi) {
@@ -173,8 +200,22 @@ impl Species {
             }
             (lo, hi) = (l, h);
         }
-        Some(0.5 * (lo + hi))
+        std::array::from_fn(|k| reached[k].then(|| 0.5 * (lo[k] + hi[k])))
     }
+}
+
+/// `a` if `pick`, else `b`, without a branch.
+#[inline(always)]
+fn select_bool(pick: bool, a: bool, b: bool) -> bool {
+    (pick & a) | (!pick & b)
+}
+
+/// `a` if `pick`, else `b`, by a bit mask: no branch for the processor to
+/// mispredict.
+#[inline(always)]
+fn select(pick: bool, a: f64, b: f64) -> f64 {
+    let mask = u64::from(pick).wrapping_neg();
+    f64::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
 }
 
 #[cfg(test)]
@@ -207,6 +248,28 @@ mod tests {
                 let want = 0.5 * (lo + hi);
                 assert_eq!(species.dbh_from_height_m(h), Some(want), "{species:?} {h}");
             }
+        }
+    }
+
+    /// Trees of mixed species and heights (some beyond the curve) in
+    /// batches of 16 and of 3 get each the answer it gets alone.
+    #[test]
+    fn a_batch_of_trees_gets_the_answers_of_each_alone() {
+        let mut rng = crate::rng::Stream::new(6, 0, 0, crate::rng::Purpose::Test);
+        let all = [Species::Pine, Species::Spruce, Species::Birch];
+        let mut tree = || {
+            (
+                all[(rng.uniform() * 3.0) as usize],
+                1.0 + 34.0 * rng.uniform(),
+            )
+        };
+        for _ in 0..5000 {
+            let trees: [(Species, f64); 16] = std::array::from_fn(|_| tree());
+            let want = trees.map(|(s, h)| s.dbh_from_height_m(h));
+            assert_eq!(Species::dbh_from_heights_m(trees), want, "{trees:?}");
+            let trees: [(Species, f64); 3] = std::array::from_fn(|_| tree());
+            let want = trees.map(|(s, h)| s.dbh_from_height_m(h));
+            assert_eq!(Species::dbh_from_heights_m(trees), want, "{trees:?}");
         }
     }
 
