@@ -32,7 +32,11 @@ vertices_m = [[-1000, -61000, 0], [1000, -61000, 0], [1000, 61000, 0], [-1000, 6
 
 CHILD = textwrap.dedent(
     """
-    import sys, time
+    import signal, sys, time
+    # Ctrl-C as in an interactive interpreter, also when the test runs in
+    # the background of a shell, whose children start with SIGINT ignored
+    # (Python then leaves it ignored and never raises KeyboardInterrupt).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     import lidarsim
     survey = lidarsim.Survey.from_toml(sys.argv[1])
     survey.build()
