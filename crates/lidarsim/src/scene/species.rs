@@ -124,9 +124,13 @@ impl Species {
 
     /// Height (m) of a tree with the given dbh from the height curve.
     pub fn height_from_dbh_m(self, dbh_m: f64) -> f64 {
+        height_curve(self.height_curve(), dbh_m)
+    }
+
+    /// The height curve's coefficients `(A, b1, b2)`.
+    fn height_curve(self) -> (f64, f64, f64) {
         let p = self.preset();
-        let d = dbh_m * 100.0;
-        p.height_a_m / (1.0 + p.height_b1 / d + p.height_b2 / (d * d))
+        (p.height_a_m, p.height_b1, p.height_b2)
     }
 
     /// Range of dbh over which the height curve is used, m: 3–80 cm, the
@@ -165,10 +169,7 @@ impl Species {
         });
         let height = trees.map(|(_, h)| h);
         let margin = closed.map(|d| 1e-10 * d);
-        let coeffs = trees.map(|(s, _)| {
-            let p = s.preset();
-            (p.height_a_m, p.height_b1, p.height_b2)
-        });
+        let coeffs = trees.map(|(s, _)| s.height_curve());
         // Every step is the same operations on all lanes (they vectorise);
         // the curve is evaluated, for all of them, only in the steps where
         // some lane's midpoint is within the margin: the last few.
@@ -178,12 +179,7 @@ impl Species {
             let near: [bool; N] = std::array::from_fn(|k| (mid[k] - closed[k]).abs() <= margin[k]);
             let mut below: [bool; N] = std::array::from_fn(|k| mid[k] < closed[k]);
             if near.iter().any(|&n| n) {
-                // [`Species::height_from_dbh_m`], operation for operation.
-                let curve: [f64; N] = std::array::from_fn(|k| {
-                    let (a, b1, b2) = coeffs[k];
-                    let d = mid[k] * 100.0;
-                    a / (1.0 + b1 / d + b2 / (d * d))
-                });
+                let curve: [f64; N] = std::array::from_fn(|k| height_curve(coeffs[k], mid[k]));
                 for k in 0..N {
                     below[k] = select_bool(near[k], curve[k] < height[k], below[k]);
                 }
@@ -202,6 +198,14 @@ impl Species {
         }
         std::array::from_fn(|k| reached[k].then(|| 0.5 * (lo[k] + hi[k])))
     }
+}
+
+/// Height (m) at dbh `dbh_m` of the height curve
+/// `h(d) = A / (1 + b1/d + b2/d²)`, d in cm.
+#[inline(always)]
+fn height_curve((a, b1, b2): (f64, f64, f64), dbh_m: f64) -> f64 {
+    let d = dbh_m * 100.0;
+    a / (1.0 + b1 / d + b2 / (d * d))
 }
 
 /// `a` if `pick`, else `b`, without a branch.
