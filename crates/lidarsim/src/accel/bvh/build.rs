@@ -1,10 +1,12 @@
 //! Building the hierarchy: a binary tree by the binned surface-area
-//! heuristic (its top levels in parallel), collapsed into the eight-wide
-//! nodes the traversals use; the scene's primitives put in leaf order.
+//! heuristic over the primitives' boxes in the nodes' `f32` frame (its top
+//! levels in parallel), collapsed into the eight-wide nodes the traversals
+//! use (`collapse.rs`); the scene's primitives put in leaf order.
 
 use rayon::prelude::*;
 
-use super::{BINS, Bvh, MAX_LEAF, Node, PARALLEL_DEPTH, PARALLEL_MIN, WIDTH, WideNode};
+use super::collapse::collapse;
+use super::{BINS, Bvh, MAX_LEAF, Node, PARALLEL_DEPTH, PARALLEL_MIN, WIDTH};
 use crate::geometry::{Aabb, DVec3};
 use crate::scene::Scene;
 
@@ -341,73 +343,6 @@ fn zeroed_nodes(n: usize) -> Vec<Node> {
 /// last is visited next (pushed, then popped).
 pub(super) fn stack_len(depth: usize) -> usize {
     (WIDTH - 1) * depth + WIDTH
-}
-
-/// The eight-wide hierarchy of a binary one (root first, children of an
-/// interior node adjacent) whose nodes reachable from the root number
-/// `used`: each wide node takes a binary node's two children and, while it
-/// has fewer than [`WIDTH`], replaces its interior child with the largest
-/// box by that child's two children. Returns the nodes and the number of
-/// them on the longest path from the root.
-fn collapse(bin: &[Node], used: usize) -> (Vec<WideNode>, usize) {
-    let mut wide = Vec::new();
-    if used == 0 {
-        return (wide, 0);
-    }
-    let area = |n: &Node| {
-        let e = [0, 1, 2].map(|a| (n.max[a] - n.min[a]) as f64);
-        e[0] * e[1] + e[1] * e[2] + e[2] * e[0]
-    };
-    wide.reserve_exact(used / (WIDTH - 1) + 1);
-    wide.push(WideNode::EMPTY);
-    let mut depth = 0;
-    // (binary node, its wide node, depth)
-    let mut work = vec![(0usize, 0usize, 1usize)];
-    while let Some((b, w, d)) = work.pop() {
-        depth = depth.max(d);
-        let mut kids = [0usize; WIDTH];
-        let mut len = if bin[b].count > 0 {
-            // A root that is a leaf: the only child.
-            kids[0] = b;
-            1
-        } else {
-            let l = bin[b].left_or_first as usize;
-            kids[..2].copy_from_slice(&[l, l + 1]);
-            2
-        };
-        while len < WIDTH {
-            let mut open: Option<(usize, f64)> = None;
-            for (i, &k) in kids[..len].iter().enumerate() {
-                if bin[k].count == 0 && open.is_none_or(|(_, a)| area(&bin[k]) > a) {
-                    open = Some((i, area(&bin[k])));
-                }
-            }
-            let Some((i, _)) = open else { break };
-            let l = bin[kids[i]].left_or_first as usize;
-            kids.copy_within(i + 1..len, i + 2);
-            kids[i] = l;
-            kids[i + 1] = l + 1;
-            len += 1;
-        }
-        let mut node = WideNode::EMPTY;
-        for (slot, &k) in kids[..len].iter().enumerate() {
-            let n = &bin[k];
-            for a in 0..3 {
-                node.planes[a][slot] = n.min[a];
-                node.planes[3 + a][slot] = n.max[a];
-            }
-            if n.count > 0 {
-                node.child[slot] = n.left_or_first;
-                node.count[slot] = n.count;
-            } else {
-                node.child[slot] = wide.len() as u32;
-                work.push((k, wide.len(), d + 1));
-                wide.push(WideNode::EMPTY);
-            }
-        }
-        wide[w] = node;
-    }
-    (wide, depth)
 }
 
 /// Largest f32 not above `x`.

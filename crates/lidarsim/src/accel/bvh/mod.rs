@@ -9,6 +9,7 @@
 
 mod build;
 mod bundle;
+mod collapse;
 mod ray;
 
 use build::stack_len;
