@@ -170,7 +170,7 @@ fn scene_with_trees(seed: u64) -> Scene {
     scene
 }
 
-/// The in-place reordering puts at `i` the item `order[i]` named, for
+/// The leaf-order gather puts at `i` the item `order[i]` named, for
 /// permutations of every cycle structure.
 #[test]
 fn leaf_order_gathers_the_named_elements() {
