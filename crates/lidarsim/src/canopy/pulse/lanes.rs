@@ -268,16 +268,18 @@ impl Lanes {
             .zip(self.level.chunks_exact(W))
             .zip(self.threshold.chunks_exact(W));
         for (c, ((depth, level), threshold)) in registers.enumerate() {
-            // The usual case, no lane reaching its threshold, in two loops
-            // that vectorise (an or-reduction, an addition).
+            // The usual case, no lane reaching its threshold: one register
+            // of sums, an or-reduction of its comparison, and the sums
+            // stored (written as one loop into a register-sized array, so
+            // that the compiler keeps it all in vector instructions).
+            let mut sum = [0.0f32; W];
             let mut any = false;
             for l in 0..W {
-                any |= depth[l] + level[l] >= threshold[l];
+                sum[l] = depth[l] + level[l];
+                any |= sum[l] >= threshold[l];
             }
             if !any {
-                for l in 0..W {
-                    depth[l] += level[l];
-                }
+                depth.copy_from_slice(&sum);
                 continue;
             }
             for l in 0..W {
