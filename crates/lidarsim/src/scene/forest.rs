@@ -12,6 +12,7 @@ use super::{MaterialId, Scene, SceneObject, Species, tree_part};
 use crate::geometry::DVec3;
 use crate::rng::{Purpose, Stream};
 use rayon::prelude::*;
+use std::sync::OnceLock;
 
 /// A stand to generate.
 #[derive(Clone, Debug, PartialEq)]
@@ -65,9 +66,11 @@ pub fn inside(poly: &[[f64; 2]], x: f64, y: f64) -> bool {
 ///
 /// The stems are placed one after another (each must keep its distance
 /// from those before it); each accepted stem then takes the next
-/// four numbers of the stream for its attributes, which are
-/// worked out afterwards on all threads from the stream's position at that
-/// stem: the same trees as drawing them in turn.
+/// four numbers of the stream for its attributes, which are worked out
+/// from the stream's position at that stem: the same trees as drawing
+/// them in turn. The attributes of every [`ATTRIBUTE_CHUNK`] stems are
+/// worked out by a task of their own while the placement goes on, so that
+/// the other threads work while placement keeps one busy.
 pub fn generate(spec: &ForestSpec, ground_z: &(dyn Fn(f64, f64) -> f64 + Sync)) -> Vec<TreeSpec> {
     let area = polygon_area(&spec.area);
     let wanted = (area / 10_000.0 * spec.stems_per_ha).round() as usize;
@@ -81,35 +84,63 @@ pub fn generate(spec: &ForestSpec, ground_z: &(dyn Fn(f64, f64) -> f64 + Sync)) 
     let mut rng = Stream::new(spec.seed, 0, 0, Purpose::Forest);
     let mut grid = SpacingGrid::new(spec.min_spacing_m, [x0, y0, x1, y1]);
     let mut stems: Vec<[f64; 2]> = crate::memory::huge_vec(wanted);
-    let mut draws: Vec<Stream> = Vec::with_capacity(wanted);
-    let mut attempts = 0usize;
-    while stems.len() < wanted && attempts < 50 * wanted + 1000 {
-        attempts += 1;
-        let x = x0 + rng.uniform() * (x1 - x0);
-        let y = y0 + rng.uniform() * (y1 - y0);
-        if !inside(&spec.area, x, y) {
-            continue;
-        }
-        if let Some(grid) = &mut grid {
-            let near = grid.any_near(x, y, |i| {
-                let [px, py] = stems[i as usize];
-                (px - x).hypot(py - y) < spec.min_spacing_m
+    // The trees of chunk `c`, set by its task.
+    let chunks: Vec<OnceLock<Vec<TreeSpec>>> = (0..wanted.div_ceil(ATTRIBUTE_CHUNK))
+        .map(|_| OnceLock::new())
+        .collect();
+    let chunks_ref = &chunks;
+    rayon::scope(|scope| {
+        // A chunk's stems and streams, handed to a task of its own.
+        let spawn = |c: usize, stems: Vec<[f64; 2]>, mut draws: Vec<Stream>| {
+            scope.spawn(move |_| {
+                let trees = stems
+                    .chunks(TREE_BATCH)
+                    .zip(draws.chunks_mut(TREE_BATCH))
+                    .flat_map(|(stems, draws)| trees_at(spec, stems, draws, ground_z))
+                    .collect();
+                // Each chunk is set once, by its only task.
+                let _ = chunks_ref[c].set(trees);
             });
-            if near {
+        };
+        let mut draws: Vec<Stream> = Vec::with_capacity(ATTRIBUTE_CHUNK);
+        let mut attempts = 0usize;
+        while stems.len() < wanted && attempts < 50 * wanted + 1000 {
+            attempts += 1;
+            let x = x0 + rng.uniform() * (x1 - x0);
+            let y = y0 + rng.uniform() * (y1 - y0);
+            if !inside(&spec.area, x, y) {
                 continue;
             }
-            grid.insert(x, y, stems.len() as u32);
+            if let Some(grid) = &mut grid {
+                let near = grid.any_near(x, y, |i| {
+                    let [px, py] = stems[i as usize];
+                    (px - x).hypot(py - y) < spec.min_spacing_m
+                });
+                if near {
+                    continue;
+                }
+                grid.insert(x, y, stems.len() as u32);
+            }
+            stems.push([x, y]);
+            draws.push(rng.clone());
+            rng.skip(DRAWS_PER_TREE);
+            if draws.len() == ATTRIBUTE_CHUNK {
+                let start = stems.len() - ATTRIBUTE_CHUNK;
+                let full = std::mem::replace(&mut draws, Vec::with_capacity(ATTRIBUTE_CHUNK));
+                spawn(start / ATTRIBUTE_CHUNK, stems[start..].to_vec(), full);
+            }
         }
-        stems.push([x, y]);
-        draws.push(rng.clone());
-        rng.skip(DRAWS_PER_TREE);
+        if !draws.is_empty() {
+            let start = stems.len() - draws.len();
+            spawn(start / ATTRIBUTE_CHUNK, stems[start..].to_vec(), draws);
+        }
+        drop(grid);
+    });
+    let mut trees = Vec::with_capacity(stems.len());
+    for chunk in chunks {
+        trees.extend(chunk.into_inner().unwrap_or_default());
     }
-    drop(grid);
-    stems
-        .par_chunks(TREE_BATCH)
-        .zip(draws.par_chunks_mut(TREE_BATCH))
-        .flat_map_iter(|(stems, draws)| trees_at(spec, stems, draws, ground_z))
-        .collect()
+    trees
 }
 
 impl Scene {
@@ -163,6 +194,11 @@ const DRAWS_PER_TREE: u64 = 4;
 /// Trees whose attributes are worked out together: their dbh bisections
 /// run side by side ([`Species::dbh_from_heights_m`]).
 const TREE_BATCH: usize = 16;
+
+/// Stems whose attributes one task works out while placement goes on
+/// ([`generate`]): a multiple of [`TREE_BATCH`], a few milliseconds of
+/// work.
+const ATTRIBUTE_CHUNK: usize = 2048 * TREE_BATCH;
 
 /// The trees whose stems stand at `stems` (at most [`TREE_BATCH`]), each
 /// with its attributes drawn from its stream in `draws`
@@ -344,6 +380,47 @@ mod tests {
                 assert!(d >= 1.5);
             }
         }
+    }
+
+    /// A stand of several attribute chunks, worked out while it is placed,
+    /// has the trees that placing the stems and drawing each accepted
+    /// tree's attributes in turn from the one stream gives.
+    #[test]
+    fn a_stand_of_many_chunks_is_the_stand_drawn_in_turn() {
+        let mut spec = stand(8);
+        spec.area = vec![[0.0, 0.0], [1000.0, 0.0], [1000.0, 600.0], [0.0, 600.0]];
+        let ground = |x: f64, y: f64| 0.01 * x - 0.02 * y;
+        let trees = generate(&spec, &ground);
+        assert_eq!(trees.len(), 48_000); // 60 ha × 800 /ha
+        assert!(trees.len() > ATTRIBUTE_CHUNK + TREE_BATCH + 1);
+
+        let mut rng = Stream::new(spec.seed, 0, 0, Purpose::Forest);
+        let mut grid = SpacingGrid::new(spec.min_spacing_m, [0.0, 0.0, 1000.0, 600.0]).unwrap();
+        let mut want: Vec<TreeSpec> = Vec::new();
+        while want.len() < trees.len() {
+            let (x, y) = (1000.0 * rng.uniform(), 600.0 * rng.uniform());
+            let near = grid.any_near(x, y, |i| {
+                let b = want[i as usize].base_m;
+                (b.x - x).hypot(b.y - y) < spec.min_spacing_m
+            });
+            if near {
+                continue;
+            }
+            grid.insert(x, y, want.len() as u32);
+            let (species, height) = species_and_height(&spec, &mut rng);
+            let dbh = species
+                .dbh_from_height_m(height)
+                .expect("heights on the curve");
+            let ratio = species.preset().crown_ratio * (0.85 + 0.3 * rng.uniform());
+            let base = DVec3::new(x, y, ground(x, y));
+            let mut tree = TreeSpec::new(base, species, dbh, height, height * (1.0 - ratio));
+            tree.seed = rng.next_u64();
+            want.push(tree);
+        }
+        assert!(trees == want, "the first tree that differs: {:?}", {
+            let k = (0..want.len()).find(|&k| trees[k] != want[k]);
+            k.map(|k| (k, &trees[k], &want[k]))
+        });
     }
 
     #[test]
