@@ -288,3 +288,23 @@ pub(super) fn lowest_before_higher(run: &[f64], h: f64, side: Side) -> (f64, boo
     }
     super::scalar::lowest_from(&run[start..end], h, low, side)
 }
+
+/// [`super::accumulate_depths`] in one register: the sums, their ordered
+/// comparison with the thresholds, the kept depths blended in where it
+/// holds.
+#[inline(always)]
+pub(super) fn accumulate_depths(
+    depth: &mut [f32; LANES],
+    level: &[f32; LANES],
+    threshold: &[f32; LANES],
+) -> u32 {
+    // SAFETY: see the module; each load and the store cover one array of
+    // `LANES` (eight) `f32`.
+    unsafe {
+        let d = _mm256_loadu_ps(depth.as_ptr());
+        let sum = _mm256_add_ps(d, _mm256_loadu_ps(level.as_ptr()));
+        let reached = _mm256_cmp_ps::<_CMP_GE_OQ>(sum, _mm256_loadu_ps(threshold.as_ptr()));
+        _mm256_storeu_ps(depth.as_mut_ptr(), _mm256_blendv_ps(sum, d, reached));
+        _mm256_movemask_ps(reached) as u32
+    }
+}

@@ -18,7 +18,9 @@
 //!   pulse's origin, and on which of them every ray of the pulse's cone
 //!   has one sign;
 //! - [`for_each_maximum`] and [`lowest_before_higher`]: the scans of
-//!   echo detection over a waveform.
+//!   echo detection over a waveform;
+//! - [`accumulate_depths`]: eight sub-rays' optical depths of the pulse
+//!   march, and which of them reach their thresholds.
 //!
 //! [`cpu`] asks the processor whether it has what the build was compiled
 //! for, so that a program can refuse to start rather than die on its first
@@ -237,6 +239,26 @@ pub fn lowest_before_higher(run: &[f64], h: f64, side: Side) -> (f64, bool) {
     #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
     {
         scalar::lowest_before_higher(run, h, side)
+    }
+}
+
+/// Adds `level` to `depth` lane by lane, except in the lanes where the
+/// sum reaches `threshold` (`depth + level >= threshold`): those keep
+/// their depth and have their bit set in the mask returned. The values are
+/// finite or `+∞`, never NaN.
+#[inline(always)]
+pub fn accumulate_depths(
+    depth: &mut [f32; LANES],
+    level: &[f32; LANES],
+    threshold: &[f32; LANES],
+) -> u32 {
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+    {
+        avx::accumulate_depths(depth, level, threshold)
+    }
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+    {
+        scalar::accumulate_depths(depth, level, threshold)
     }
 }
 

@@ -138,3 +138,21 @@ pub(super) fn lowest_from(run: &[f64], h: f64, mut low: f64, side: Side) -> (f64
     };
     (low, reached)
 }
+
+/// [`super::accumulate_depths`] one lane at a time.
+pub fn accumulate_depths(
+    depth: &mut [f32; LANES],
+    level: &[f32; LANES],
+    threshold: &[f32; LANES],
+) -> u32 {
+    let mut mask = 0;
+    for l in 0..LANES {
+        let sum = depth[l] + level[l];
+        if sum >= threshold[l] {
+            mask |= 1 << l;
+        } else {
+            depth[l] = sum;
+        }
+    }
+    mask
+}

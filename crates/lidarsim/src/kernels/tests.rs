@@ -177,3 +177,36 @@ fn lowest_before_higher_matches_the_scalar_twin_and_the_definition() {
         }
     }
 }
+
+#[test]
+fn accumulated_depths_match_the_scalar_twin() {
+    let mut u = uniform(6);
+    for case in 0..5000 {
+        let depth: [f32; LANES] = std::array::from_fn(|_| (u() + 0.5) as f32 * 3.0);
+        let level: [f32; LANES] = std::array::from_fn(|_| (u() + 0.5) as f32 * 0.5);
+        // Thresholds around the sums, some on them exactly, and the
+        // padding's +∞.
+        let threshold: [f32; LANES] = std::array::from_fn(|l| match (case + l) % 4 {
+            0 => depth[l] + level[l],
+            1 => f32::INFINITY,
+            _ => depth[l] + (u() + 0.5) as f32,
+        });
+        let (mut got, mut twin) = (depth, depth);
+        let mask = accumulate_depths(&mut got, &level, &threshold);
+        assert_eq!(
+            mask,
+            scalar::accumulate_depths(&mut twin, &level, &threshold)
+        );
+        assert_eq!(got.map(f32::to_bits), twin.map(f32::to_bits), "case {case}");
+        for l in 0..LANES {
+            let reached = depth[l] + level[l] >= threshold[l];
+            assert_eq!(mask >> l & 1 == 1, reached, "case {case} lane {l}");
+            let want = if reached {
+                depth[l]
+            } else {
+                depth[l] + level[l]
+            };
+            assert_eq!(got[l].to_bits(), want.to_bits(), "case {case} lane {l}");
+        }
+    }
+}

@@ -9,10 +9,11 @@
 //! scalar and vector code give the same bits (no fused operations), so a
 //! lane's depth computed alone ([`row_depth`]) is the one the loop added.
 
+use crate::kernels;
 use crate::scene::CrownLevel;
 
 /// Sub-rays handled together: one 256-bit register of `f32`.
-pub(super) const W: usize = 8;
+pub(super) const W: usize = kernels::LANES;
 
 /// [`CrownLevel`] in `f32`, for the lanes.
 #[derive(Clone, Copy, Debug)]
@@ -268,26 +269,15 @@ impl Lanes {
             .zip(self.level.chunks_exact(W))
             .zip(self.threshold.chunks_exact(W));
         for (c, ((depth, level), threshold)) in registers.enumerate() {
-            // The usual case, no lane reaching its threshold: one register
-            // of sums, an or-reduction of its comparison, and the sums
-            // stored (written as one loop into a register-sized array, so
-            // that the compiler keeps it all in vector instructions).
-            let mut sum = [0.0f32; W];
-            let mut any = false;
-            for l in 0..W {
-                sum[l] = depth[l] + level[l];
-                any |= sum[l] >= threshold[l];
-            }
-            if !any {
-                depth.copy_from_slice(&sum);
-                continue;
-            }
-            for l in 0..W {
-                if depth[l] + level[l] >= threshold[l] {
-                    reached.push(c * W + l);
-                } else {
-                    depth[l] += level[l];
-                }
+            let as_register = "chunks of W";
+            let mut mask = kernels::accumulate_depths(
+                depth.try_into().expect(as_register),
+                level.try_into().expect(as_register),
+                threshold.try_into().expect(as_register),
+            );
+            while mask != 0 {
+                reached.push(c * W + mask.trailing_zeros() as usize);
+                mask &= mask - 1;
             }
         }
     }
