@@ -93,11 +93,13 @@ pub fn generate(spec: &ForestSpec, ground_z: &(dyn Fn(f64, f64) -> f64 + Sync)) 
         // A chunk's stems and streams, handed to a task of its own.
         let spawn = |c: usize, stems: Vec<[f64; 2]>, mut draws: Vec<Stream>| {
             scope.spawn(move |_| {
-                let trees = stems
-                    .chunks(TREE_BATCH)
-                    .zip(draws.chunks_mut(TREE_BATCH))
-                    .flat_map(|(stems, draws)| trees_at(spec, stems, draws, ground_z))
-                    .collect();
+                let mut trees = Vec::with_capacity(stems.len());
+                trees.extend(
+                    stems
+                        .chunks(TREE_BATCH)
+                        .zip(draws.chunks_mut(TREE_BATCH))
+                        .flat_map(|(stems, draws)| trees_at(spec, stems, draws, ground_z)),
+                );
                 // Each chunk is set once, by its only task.
                 let _ = chunks_ref[c].set(trees);
             });
