@@ -125,15 +125,19 @@ impl Lanes {
     pub(super) fn fill(&mut self, n: usize, lane: impl Fn(usize) -> Lane) {
         let padded = n.next_multiple_of(W);
         self.resize(padded);
+        // Columns cut to `n` first, so that the loop needs no bounds checks.
+        let (sx, sy, step) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.step[..n]);
+        let (top, bottom) = (&mut self.top[..n], &mut self.bottom[..n]);
+        let (threshold, index) = (&mut self.threshold[..n], &mut self.lane[..n]);
         for i in 0..n {
             let l = lane(i);
-            self.sx[i] = l.sx;
-            self.sy[i] = l.sy;
-            self.step[i] = l.step;
-            self.top[i] = l.top;
-            self.bottom[i] = l.bottom;
-            self.threshold[i] = l.threshold;
-            self.lane[i] = i as u32;
+            sx[i] = l.sx;
+            sy[i] = l.sy;
+            step[i] = l.step;
+            top[i] = l.top;
+            bottom[i] = l.bottom;
+            threshold[i] = l.threshold;
+            index[i] = i as u32;
         }
         self.depth[..padded].fill(0.0);
         self.level[..padded].fill(0.0);

@@ -73,6 +73,8 @@ struct Row {
 #[derive(Clone, Debug, Default)]
 pub struct PulseMarch {
     dirs: Vec<DVec3>,
+    /// Each sub-ray's `(d_x/d_z, d_y/d_z)`.
+    drifts: Vec<(f64, f64)>,
     t_start: Vec<f64>,
     t_stop: Vec<f64>,
     lanes: Lanes,
@@ -166,17 +168,22 @@ impl PulseMarch {
         // height; the levels' spacing from its mean steepness.
         let mean_dz = self.dirs.iter().map(|d| d.z).sum::<f64>() / n as f64;
         let level_step = config.step_m * -mean_dz;
+        // Each sub-ray's horizontal drift per metre of height.
+        self.drifts.clear();
+        self.drifts
+            .extend(self.dirs.iter().map(|d| (d.x / d.z, d.y / d.z)));
         let (mut cx, mut cy) = (0.0, 0.0);
-        for d in &self.dirs {
-            cx += d.x / d.z;
-            cy += d.y / d.z;
+        for &(rx, ry) in &self.drifts {
+            cx += rx;
+            cy += ry;
         }
         let (cx, cy) = (cx / n as f64, cy / n as f64);
         let mut spread = 0.0f64;
         let (mut top_max, mut bottom_min) = (f64::NEG_INFINITY, f64::INFINITY);
         for i in 0..n {
             let d = self.dirs[i];
-            let (sx, sy) = (d.x / d.z - cx, d.y / d.z - cy);
+            let (rx, ry) = self.drifts[i];
+            let (sx, sy) = (rx - cx, ry - cy);
             spread = spread.max((sx * sx + sy * sy).sqrt());
             top_max = top_max.max(d.z * self.t_start[i]);
             bottom_min = bottom_min.min(d.z * self.t_stop[i]);
@@ -219,13 +226,14 @@ impl PulseMarch {
 
         // Per sub-ray: its drift from the centre line, step, the heights it
         // is open between, and its threshold (from its own stream).
-        let dirs = &self.dirs;
-        let (t_start, t_stop) = (&self.t_start, &self.t_stop);
+        let (dirs, drifts) = (&self.dirs[..n], &self.drifts[..n]);
+        let (t_start, t_stop) = (&self.t_start[..n], &self.t_stop[..n]);
         self.lanes.fill(n, |i| {
             let d = dirs[i];
+            let (rx, ry) = drifts[i];
             Lane {
-                sx: (d.x / d.z - cx) as f32,
-                sy: (d.y / d.z - cy) as f32,
+                sx: (rx - cx) as f32,
+                sy: (ry - cy) as f32,
                 step: (level_step / -d.z) as f32,
                 top: (d.z * t_start[i]) as f32,
                 bottom: (d.z * t_stop[i]) as f32,
