@@ -68,9 +68,9 @@ pub fn inside(poly: &[[f64; 2]], x: f64, y: f64) -> bool {
 /// from those before it); each accepted stem then takes the next
 /// four numbers of the stream for its attributes, which are worked out
 /// from the stream's position at that stem: the same trees as drawing
-/// them in turn. The attributes of every [`ATTRIBUTE_CHUNK`] stems are
-/// worked out by a task of their own while the placement goes on, so that
-/// the other threads work while placement keeps one busy.
+/// them in turn. The attributes of every 32 768 stems are worked out by a
+/// task of their own while the placement goes on, so that the other
+/// threads work while placement keeps one busy.
 pub fn generate(spec: &ForestSpec, ground_z: &(dyn Fn(f64, f64) -> f64 + Sync)) -> Vec<TreeSpec> {
     let area = polygon_area(&spec.area);
     let wanted = (area / 10_000.0 * spec.stems_per_ha).round() as usize;
