@@ -179,7 +179,7 @@ fn lowest_before_higher_matches_the_scalar_twin_and_the_definition() {
 }
 
 #[test]
-fn accumulated_depths_match_the_scalar_twin() {
+fn accumulated_depths_match_the_scalar_twin_and_the_definition() {
     let mut u = uniform(6);
     for case in 0..5000 {
         let depth: [f32; LANES] = std::array::from_fn(|_| (u() + 0.5) as f32 * 3.0);

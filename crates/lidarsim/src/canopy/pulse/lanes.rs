@@ -4,10 +4,12 @@
 //!
 //! Offsets from a stem are metres and the drifts a fraction of a metre, so
 //! `f32` holds positions to micrometres, against a density that varies
-//! over decimetres. Every loop is straight-line code over whole registers
-//! (choices as selects, no early exit), which the compiler vectorises;
-//! scalar and vector code give the same bits (no fused operations), so a
-//! lane's depth computed alone ([`row_depth`]) is the one the loop added.
+//! over decimetres. The density loops are straight-line code over whole
+//! registers (choices as selects, no early exit), which the compiler
+//! vectorises; scalar and vector code give the same bits (no fused
+//! operations), so a lane's depth computed alone ([`Lanes::cell_depth`])
+//! is the one the loop added. The depths are added and compared with the
+//! thresholds a register at a time by [`kernels::accumulate_depths`].
 
 use crate::kernels;
 use crate::scene::CrownLevel;
@@ -267,18 +269,12 @@ impl Lanes {
     #[inline(always)]
     pub(super) fn advance(&mut self, reached: &mut Vec<usize>) {
         reached.clear();
-        let registers = self
-            .depth
-            .chunks_exact_mut(W)
-            .zip(self.level.chunks_exact(W))
-            .zip(self.threshold.chunks_exact(W));
+        // The columns' lengths are multiples of W: no remainder.
+        let registers = (self.depth.as_chunks_mut::<W>().0.iter_mut())
+            .zip(self.level.as_chunks::<W>().0)
+            .zip(self.threshold.as_chunks::<W>().0);
         for (c, ((depth, level), threshold)) in registers.enumerate() {
-            let as_register = "chunks of W";
-            let mut mask = kernels::accumulate_depths(
-                depth.try_into().expect(as_register),
-                level.try_into().expect(as_register),
-                threshold.try_into().expect(as_register),
-            );
+            let mut mask = kernels::accumulate_depths(depth, level, threshold);
             while mask != 0 {
                 reached.push(c * W + mask.trailing_zeros() as usize);
                 mask &= mask - 1;
