@@ -17,6 +17,7 @@ mod scratch;
 mod truth;
 
 use std::io;
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -218,10 +219,14 @@ impl<'a> Simulator<'a> {
         k1: u64,
         scratch: &mut Scratch,
     ) -> (Vec<PointRecord>, RunCounts) {
-        self.simulate_block_recording(line, k0, k1, scratch, None)
+        let mut points = Vec::new();
+        let counts = self.simulate_block_recording(line, k0, k1, scratch, &mut points, None);
+        (points, counts)
     }
 
-    /// Simulates pulses `[k0, k1)` of `line`; with `waveforms`, also keeps
+    /// Simulates pulses `[k0, k1)` of `line` into `points` (cleared first,
+    /// so that a caller can give the same buffer block after block); with
+    /// `waveforms`, also keeps
     /// the waveform of every pulse that has an echo there (the whole window
     /// the receiver synthesised: from before the first sub-ray return by the
     /// pulse's rise to after the last by its tail, see
@@ -235,15 +240,17 @@ impl<'a> Simulator<'a> {
         k0: u64,
         k1: u64,
         scratch: &mut Scratch,
+        points: &mut Vec<PointRecord>,
         mut waveforms: Option<&mut WaveformBlock>,
-    ) -> (Vec<PointRecord>, RunCounts) {
-        let mut points = Vec::with_capacity(((k1 - k0) as usize) * 2);
+    ) -> RunCounts {
+        points.clear();
+        points.reserve(((k1 - k0) as usize) * 2);
         let mut counts = RunCounts::default();
         let bin_ps = self.survey.receiver.bin_s * 1e12;
         for k in k0..k1 {
             counts.pulse_slots += 1;
             // A polygon's ticks in its dead time emit nothing.
-            let Some(n) = self.simulate_pulse(line, k, scratch, &mut points) else {
+            let Some(n) = self.simulate_pulse(line, k, scratch, points) else {
                 continue;
             };
             counts.pulses += 1;
@@ -263,10 +270,10 @@ impl<'a> Simulator<'a> {
             }
         }
         counts.points = points.len() as u64;
-        for p in &points {
+        for p in points.iter() {
             counts.points_by_return[usize::from(p.return_number.clamp(1, 15)) - 1] += 1;
         }
-        (points, counts)
+        counts
     }
 
     /// Simulates every pulse of every flight line on `threads` threads and
@@ -351,25 +358,36 @@ impl<'a> Simulator<'a> {
             window: 4 * threads,
             stop: &stopped,
         };
+        // The writer hands each block back once written, and the next job
+        // fills it again: a block's buffers (some 660 KB of points) are
+        // allocated once per block in flight, not once per block. An
+        // allocator that gives large blocks back to the system at once
+        // (glibc with MALLOC_TRIM_THRESHOLD_ set, as Dask's workers are)
+        // would otherwise map them and fault them in for every block.
+        let spare = Mutex::new(Vec::new());
         let mut writer = Writer {
             sinks,
             total: RunCounts::default(),
             progress,
+            spare: &spare,
         };
         let done = executor.run(
             jobs.len(),
             Scratch::default,
             |j, scratch| {
                 let (l, k0, k1) = jobs[j];
-                let mut waves = WaveformBlock::default();
-                let record = self.record_waveforms.then_some(&mut waves);
-                let (points, counts) =
-                    self.simulate_block_recording(&self.lines[l], k0, k1, scratch, record);
-                Block {
+                let mut block: Block = lock(&spare).pop().unwrap_or_default();
+                let Block {
                     points,
                     counts,
                     waves,
-                }
+                } = &mut block;
+                waves.packets.clear();
+                waves.samples.clear();
+                let record = self.record_waveforms.then_some(waves);
+                *counts =
+                    self.simulate_block_recording(&self.lines[l], k0, k1, scratch, points, record);
+                block
             },
             &mut writer,
         )?;
@@ -387,6 +405,7 @@ impl<'a> Simulator<'a> {
 }
 
 /// The points, counts and waveforms of one block of pulses.
+#[derive(Default)]
 struct Block {
     points: Vec<PointRecord>,
     counts: RunCounts,
@@ -398,6 +417,8 @@ struct Writer<'s, 'p> {
     sinks: &'s mut [&'p mut (dyn PointSink + 'static)],
     total: RunCounts,
     progress: &'s (dyn Fn(u64) + Sync),
+    /// Written blocks, for the next jobs to fill again.
+    spare: &'s Mutex<Vec<Block>>,
 }
 
 impl InOrder<Block> for Writer<'_, '_> {
@@ -408,12 +429,19 @@ impl InOrder<Block> for Writer<'_, '_> {
             sink.write_block(&block.points, &block.waves)?;
         }
         self.total.add(&block.counts);
+        lock(self.spare).push(block);
         Ok(())
     }
 
     fn caught_up(&mut self) {
         (self.progress)(self.total.pulse_slots);
     }
+}
+
+/// The spare blocks, whether or not a thread panicked holding them (they
+/// are emptied before use).
+fn lock(spare: &Mutex<Vec<Block>>) -> std::sync::MutexGuard<'_, Vec<Block>> {
+    spare.lock().unwrap_or_else(|e| e.into_inner())
 }
 
 /// A pulse of a survey: flight line (0-based index) and pulse within it.
