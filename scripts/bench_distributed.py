@@ -8,7 +8,10 @@ is the unsplit one's bytes. Not part of the test suite (it measures time).
 With --rounds R the three runs are repeated R times, in turn, each split
 on a fresh cluster, and the ratios of each round and their medians are
 printed: on a shared host whose speed drifts, runs side by side in time
-compare fairer than one run of each.
+compare fairer than one run of each. Every run starts with the runs
+before it written out and removed (os.sync), so that none pays for
+another's disk writes; each round prints when the split's parts ended and
+how long the merge took after them.
 
     target/pyenv/bin/python scripts/bench_distributed.py [--lines 4] [--pulses-per-line 10000000] [--rounds 1]
 
@@ -17,6 +20,7 @@ installs both into target/pyenv) and target/release/lidarsim.
 """
 
 import argparse
+import hashlib
 import os
 import statistics
 import re
@@ -96,25 +100,47 @@ def main():
         shutil.rmtree(work, ignore_errors=True)
 
 
+def digest_and_remove(out):
+    """The SHA-256 of out/points.las; out is removed and what is still to be
+    written of it dropped (os.sync), so that the next timed run does not
+    share the disk with this one's write-back (1.6 GB at the default size)."""
+    h = hashlib.sha256()
+    with open(out / "points.las", "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 24), b""):
+            h.update(chunk)
+    shutil.rmtree(out)
+    os.sync()
+    return h.hexdigest()
+
+
 def one_round(work, survey):
     """The three runs once: wall times of 1 thread, 2 threads and the split
     (a fresh 2-worker cluster, so that no worker holds the scene already),
-    and whether the split's points.las is the unsplit one's."""
+    and whether the split's points.las is the unsplit one's. Each run starts
+    with no other run's output waiting to be written."""
     for d in ("one", "two", "split", "split.parts"):
         shutil.rmtree(work / d, ignore_errors=True)
+    os.sync()
     one, _ = timed(lambda: lidarsim.Survey.load(work / "lines.toml").run_to(
         work / "one", threads=1, progress=False))
+    digest = digest_and_remove(work / "one")
     two, _ = timed(lambda: lidarsim.Survey.load(work / "lines.toml").run_to(
         work / "two", threads=2, progress=False))
+    digest_and_remove(work / "two")
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                            dashboard_address=None)
     client = Client(cluster)
     client.run(lambda: __import__("lidarsim"))
+    started = time.perf_counter()
+    parts_done = []
     split, _ = timed(lambda: lidarsim.distributed.run(
-        survey, client, work / "split", parts=2, threads_per_part=1, progress=False))
+        survey, client, work / "split", parts=2, threads_per_part=1,
+        progress=lambda *_: parts_done.append(time.perf_counter() - started)))
     client.close()
     cluster.close()
-    same = (work / "one" / "points.las").read_bytes() == (work / "split" / "points.las").read_bytes()
+    print("  split: parts done at " + ", ".join(f"{t:.2f}" for t in parts_done)
+          + f" s, merged {split - parts_done[-1]:.2f} s later", flush=True)
+    same = digest_and_remove(work / "split") == digest
     return one, two, split, same
 
 
