@@ -224,13 +224,12 @@ impl<'a> Simulator<'a> {
         (points, counts)
     }
 
-    /// Simulates pulses `[k0, k1)` of `line` into `points` (cleared first,
-    /// so that a caller can give the same buffer block after block); with
-    /// `waveforms`, also keeps
-    /// the waveform of every pulse that has an echo there (the whole window
-    /// the receiver synthesised: from before the first sub-ray return by the
-    /// pulse's rise to after the last by its tail, see
-    /// [`Receiver::synthesize`]).
+    /// Simulates pulses `[k0, k1)` of `line` into `points`; with
+    /// `waveforms`, also keeps the waveform of every pulse that has an echo
+    /// there (the whole window the receiver synthesised: from before the
+    /// first sub-ray return by the pulse's rise to after the last by its
+    /// tail, see [`Receiver::synthesize`]). Both are cleared first, so that
+    /// a caller can give the same buffers block after block.
     // Kept out of line: profiles (scripts/profile_bench.sh) count the
     // instructions under it, whatever the inlining around it.
     #[inline(never)]
@@ -245,6 +244,10 @@ impl<'a> Simulator<'a> {
     ) -> RunCounts {
         points.clear();
         points.reserve(((k1 - k0) as usize) * 2);
+        if let Some(w) = waveforms.as_deref_mut() {
+            w.packets.clear();
+            w.samples.clear();
+        }
         let mut counts = RunCounts::default();
         let bin_ps = self.survey.receiver.bin_s * 1e12;
         for k in k0..k1 {
@@ -382,8 +385,6 @@ impl<'a> Simulator<'a> {
                     counts,
                     waves,
                 } = &mut block;
-                waves.packets.clear();
-                waves.samples.clear();
                 let record = self.record_waveforms.then_some(waves);
                 *counts =
                     self.simulate_block_recording(&self.lines[l], k0, k1, scratch, points, record);
