@@ -101,9 +101,10 @@ def main():
 
 
 def digest_and_remove(out):
-    """The SHA-256 of out/points.las; out is removed and what is still to be
-    written of it dropped (os.sync), so that the next timed run does not
-    share the disk with this one's write-back (1.6 GB at the default size)."""
+    """The SHA-256 of out/points.las. Then out is removed (its pages still
+    to be written are dropped with it) and os.sync() writes whatever else is
+    pending, so that the next timed run does not share the disk with this
+    one's write-back (1.6 GB at the default size)."""
     h = hashlib.sha256()
     with open(out / "points.las", "rb") as f:
         for chunk in iter(lambda: f.read(1 << 24), b""):
