@@ -17,9 +17,9 @@ pub mod text;
 mod xyz;
 
 pub use las::{
-    Digitizer, JoinedLas, LasSettings, LasWriter, POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN,
-    WAVEFORM_BITS, WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN, join as join_las,
-    return_numbers, scan_angle_units,
+    Digitizer, JoinedLas, LasJoin, LasSettings, LasWriter, POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN,
+    WAVEFORM_BITS, WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN, return_numbers,
+    scan_angle_units,
 };
 pub use ply::{PLY_PROPERTIES, PLY_RECORD_LEN, PlyWriter};
 pub use xyz::XyzWriter;

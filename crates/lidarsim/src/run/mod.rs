@@ -586,10 +586,14 @@ pub(crate) fn write_survey(survey: &Survey, out_dir: &Path) -> Result<String, Ru
             .map_err(named(out_dir.join(&data.path)))?;
     }
     let path = out_dir.join("survey.toml");
-    let text = toml::to_string(&replayable_with_data(survey))
-        .map_err(|e| named(path.clone())(io::Error::other(e)))?;
+    let text = survey_text(survey).map_err(|e| named(path.clone())(io::Error::other(e)))?;
     write_atomic(&path, text.as_bytes()).map_err(named(path))?;
     Ok(text)
+}
+
+/// The text [`write_survey`] writes for `survey`.
+pub(crate) fn survey_text(survey: &Survey) -> Result<String, toml::ser::Error> {
+    toml::to_string(&replayable_with_data(survey))
 }
 
 /// The part of the scene the flight lines can see: each line's bounding box

@@ -1,9 +1,9 @@
 //! The LAS files of a split run's parts joined into one: copied as they
-//! are ([`join`]) before the settings that check them are known — while a
-//! merge still builds the survey's scene — and then taken over by a writer
-//! of those settings ([`LasWriter::adopt`]), which checks every part
-//! against them and writes the file's own VLRs and, when finished, its
-//! header.
+//! are, one by one as they arrive ([`LasJoin`]), before the settings that
+//! check them are known — while parts still run, or a merge still builds
+//! the survey's scene — and then taken over by a writer of those settings
+//! ([`LasWriter::adopt`]), which checks every part against them and writes
+//! the file's own VLRs and, when finished, its header.
 
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -14,7 +14,7 @@ use crate::output::{AtomicFile, file_error};
 /// Offset of "offset to point data" (`u32`) in a LAS 1.4 header.
 const OFFSET_TO_POINTS_AT: usize = 96;
 
-/// Part files joined by [`join`], not yet checked: the first file whole,
+/// Part files joined by a [`LasJoin`], not yet checked: the first file whole,
 /// then the point records of each later one.
 #[derive(Debug)]
 pub struct JoinedLas {
@@ -36,77 +36,110 @@ struct Joined {
     len: u64,
 }
 
-/// Joins the LAS files `parts` into `path` (as `path.partial` until the
-/// writer that adopts it finishes): the first file as it is, then the
-/// records of each later one (what follows its header and VLRs);
-/// `joined(i)` is called after part `i`. With `take_first` the first file
-/// is moved into place rather than copied, when the file system allows
-/// it (it is gone from its part then, and a failure later leaves the
-/// joined file behind under its `.partial` name). Nothing but the LAS
-/// signature is checked here; [`LasWriter::adopt`] checks the rest. A
-/// file already at `path` is left for the caller to remove (the merge does
-/// once its survey's world is built) or for the joined file to replace.
-pub fn join(
-    path: &Path,
-    parts: &[PathBuf],
-    take_first: bool,
-    mut joined: impl FnMut(usize),
-) -> io::Result<JoinedLas> {
-    let partial = AtomicFile::partial_of(path);
-    let mut moved = None;
-    if take_first && let Some(first) = parts.first() {
-        signature(first)?;
-        if std::fs::rename(first, &partial).is_ok() {
-            let len = std::fs::metadata(&partial)
-                .map_err(|e| file_error(&partial, e))?
-                .len();
-            moved = Some((AtomicFile::reopen(path, len)?, len));
+/// LAS files joined into `path` (as `path.partial` until the writer that
+/// adopts it finishes), one at a time, as the parts of a split run
+/// arrive: the first file as it is, then the records of each later one
+/// (what follows its header and VLRs). Nothing but the LAS signature is
+/// checked here; [`LasWriter::adopt`] checks the rest. A file already at
+/// `path` is left for the caller to remove (the merge does once its
+/// survey's world is built) or for the joined file to replace.
+#[derive(Debug)]
+pub struct LasJoin {
+    /// The joined file's final name.
+    path: PathBuf,
+    /// The parts joined so far, in `joined`'s file.
+    joined: Option<JoinedLas>,
+    /// The copy's buffer.
+    buf: Vec<u8>,
+}
+
+impl LasJoin {
+    /// A join into `path` (written as `path.partial`) of no part yet.
+    pub fn new(path: &Path) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            joined: None,
+            buf: Vec::new(),
         }
     }
-    let mut out = Vec::with_capacity(parts.len());
-    let (mut file, mut len) = match moved {
-        Some((file, len)) => {
-            out.push(Joined {
-                named: parts[0].clone(),
-                header: partial,
-                len,
-            });
-            joined(0);
-            (file, len)
-        }
-        None => (AtomicFile::create_beside(path)?, 0),
-    };
-    let mut buf = vec![0u8; LAS_WRITE_BYTES];
-    for (i, part) in parts.iter().enumerate().skip(out.len()) {
+
+    /// The parts joined so far.
+    pub fn parts(&self) -> usize {
+        self.joined.as_ref().map_or(0, |j| j.parts.len())
+    }
+
+    /// Appends the LAS file `part`: whole if it is the first (moved into
+    /// place with `take_first`, when the file system allows it: it is gone
+    /// from its part then, and a failure later leaves the joined file
+    /// behind under its `.partial` name), else its point records.
+    pub fn append(&mut self, part: &Path, take_first: bool) -> io::Result<()> {
         let named = |e| file_error(part, e);
+        let Some(joined) = self.joined.as_mut() else {
+            if take_first {
+                signature(part)?;
+                let partial = AtomicFile::partial_of(&self.path);
+                if std::fs::rename(part, &partial).is_ok() {
+                    let len = std::fs::metadata(&partial)
+                        .map_err(|e| file_error(&partial, e))?
+                        .len();
+                    self.joined = Some(JoinedLas {
+                        file: AtomicFile::reopen(&self.path, len)?,
+                        parts: vec![Joined {
+                            named: part.to_path_buf(),
+                            header: partial,
+                            len,
+                        }],
+                        len,
+                    });
+                    return Ok(());
+                }
+            }
+            self.joined = Some(JoinedLas {
+                file: AtomicFile::create_beside(&self.path)?,
+                parts: Vec::new(),
+                len: 0,
+            });
+            return self.append(part, false);
+        };
         let (mut f, records) = signature(part)?;
-        let start = if i == 0 { 0 } else { records };
+        let start = if joined.parts.is_empty() { 0 } else { records };
         f.seek(SeekFrom::Start(start)).map_err(named)?;
+        if self.buf.is_empty() {
+            self.buf = vec![0u8; LAS_WRITE_BYTES];
+        }
         let mut copied = start;
         loop {
-            let n = match f.read(&mut buf) {
+            let n = match f.read(&mut self.buf) {
                 Ok(0) => break,
                 Ok(n) => n,
                 Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
                 Err(e) => return Err(named(e)),
             };
-            file.write_unbuffered(&buf[..n])
-                .map_err(|e| file.error(e))?;
-            len += n as u64;
+            joined
+                .file
+                .write_unbuffered(&self.buf[..n])
+                .map_err(|e| joined.file.error(e))?;
+            joined.len += n as u64;
             copied += n as u64;
         }
-        out.push(Joined {
-            named: part.clone(),
-            header: part.clone(),
+        joined.parts.push(Joined {
+            named: part.to_path_buf(),
+            header: part.to_path_buf(),
             len: copied,
         });
-        joined(i);
+        Ok(())
     }
-    Ok(JoinedLas {
-        file,
-        parts: out,
-        len,
-    })
+
+    /// The joined file, for [`LasWriter::adopt`]; an error if no part was
+    /// appended.
+    pub fn finish(self) -> io::Result<JoinedLas> {
+        self.joined.ok_or_else(|| {
+            file_error(
+                &self.path,
+                io::Error::new(io::ErrorKind::InvalidInput, "no LAS file to join"),
+            )
+        })
+    }
 }
 
 /// `part` opened, once its first bytes are a LAS header's, with the

@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
 
 use super::{AtomicFile, OutFile, PointRecord, PointSink, WaveformBlock, file_error};
-pub use join::{JoinedLas, join};
+pub use join::{JoinedLas, LasJoin};
 use vlr::{ATTRIBUTE_FIELDS, ERROR_FIELDS, fixed_str};
 pub use wdp::{
     Digitizer, WAVEFORM_BITS, WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN,
