@@ -10,10 +10,10 @@ on a fresh cluster, and the ratios of each round and their medians are
 printed: on a shared host whose speed drifts, runs side by side in time
 compare fairer than one run of each. Every run starts with the runs
 before it written out and removed (os.sync), so that none pays for
-another's disk writes; each round prints when the split's parts ended and
-how long the merge took after them.
+another's disk writes; each round prints when the split's last two parts
+ended and how long the merge took after them.
 
-    target/pyenv/bin/python scripts/bench_distributed.py [--lines 4] [--pulses-per-line 10000000] [--rounds 1]
+    target/pyenv/bin/python scripts/bench_distributed.py [--lines 4] [--pulses-per-line 10000000] [--rounds 1] [--parts N]
 
 Needs the lidarsim package and distributed (scripts/check_python.sh
 installs both into target/pyenv) and target/release/lidarsim.
@@ -49,6 +49,8 @@ def main():
     ap.add_argument("--pulses-per-line", type=int, default=10_000_000)
     ap.add_argument("--rounds", type=int, default=1, help="repeat the three runs, in turn")
     ap.add_argument("--keep", action="store_true", help="keep the working directory")
+    ap.add_argument("--parts", type=int, default=None,
+                    help="parts of the split (default: lidarsim.distributed.run's)")
     a = ap.parse_args()
     os.environ.setdefault("SOURCE_DATE_EPOCH", "1700000000")
     work = Path(tempfile.mkdtemp(prefix="lidarsim-bench-dist-"))
@@ -79,7 +81,7 @@ def main():
 
     rounds = []
     for r in range(a.rounds):
-        one, two, split, same = one_round(work, survey)
+        one, two, split, same = one_round(work, survey, a.parts)
         if a.rounds > 1:
             print(f"round {r + 1}: {one:.2f} / {two:.2f} / {split:.2f} s, speed-up "
                   f"{one / split:.2f}, overhead {100 * (split / two - 1):+.1f} %", flush=True)
@@ -114,7 +116,7 @@ def digest_and_remove(out):
     return h.hexdigest()
 
 
-def one_round(work, survey):
+def one_round(work, survey, parts):
     """The three runs once: wall times of 1 thread, 2 threads and the split
     (a fresh 2-worker cluster, so that no worker holds the scene already),
     and whether the split's points.las is the unsplit one's. Each run starts
@@ -135,11 +137,12 @@ def one_round(work, survey):
     started = time.perf_counter()
     parts_done = []
     split, _ = timed(lambda: lidarsim.distributed.run(
-        survey, client, work / "split", parts=2, threads_per_part=1,
+        survey, client, work / "split", parts=parts, threads_per_part=1,
         progress=lambda *_: parts_done.append(time.perf_counter() - started)))
     client.close()
     cluster.close()
-    print("  split: parts done at " + ", ".join(f"{t:.2f}" for t in parts_done)
+    print(f"  split: {len(parts_done)} parts, the last two done at "
+          + ", ".join(f"{t:.2f}" for t in parts_done[-2:])
           + f" s, merged {split - parts_done[-1]:.2f} s later", flush=True)
     same = digest_and_remove(work / "split") == digest
     return one, two, split, same

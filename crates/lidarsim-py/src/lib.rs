@@ -5,6 +5,7 @@
 //! the documented API.
 
 mod convert;
+mod part_merge;
 mod points;
 mod run;
 mod scene_data;
@@ -25,9 +26,10 @@ pyo3::create_exception!(
 
 /// Merges the parts of a split run (directories of `run_part`) into
 /// `out_dir`: the files of the unsplit run; returns its summary. With
-/// `take_parts` the parts are taken (moved from, then removed).
+/// `take_parts` the parts are taken (moved from, then removed); `survey`:
+/// the parts' survey, whose world the merge uses if it is built.
 #[pyfunction]
-#[pyo3(signature = (part_dirs, out_dir, threads, overwrite=false, take_parts=false))]
+#[pyo3(signature = (part_dirs, out_dir, threads, overwrite=false, take_parts=false, survey=None))]
 fn merge<'py>(
     py: Python<'py>,
     part_dirs: Vec<std::path::PathBuf>,
@@ -35,8 +37,16 @@ fn merge<'py>(
     threads: usize,
     overwrite: bool,
     take_parts: bool,
+    survey: Option<PyRef<'py, survey::SurveyCore>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    run::merge(py, part_dirs, &out_dir, threads, overwrite, take_parts)
+    part_merge::merge(
+        py,
+        part_dirs,
+        &out_dir,
+        threads,
+        (overwrite, take_parts),
+        survey.as_deref(),
+    )
 }
 
 /// The module: refuses to load on a processor without the instructions the
@@ -58,5 +68,6 @@ fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<survey::SurveyCore>()?;
     m.add_class::<stream::PointStream>()?;
     m.add_function(wrap_pyfunction!(merge, m)?)?;
+    m.add_class::<part_merge::PartMerge>()?;
     Ok(())
 }

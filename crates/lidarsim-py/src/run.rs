@@ -200,7 +200,7 @@ pub struct DirOptions {
 /// returns what it returns as Python data (a dict, as its JSON). An error
 /// of the watch (Ctrl-C, the callback's) comes first; the job's is an
 /// `OSError`. Callers check `threads` before loading the world.
-fn watched<'py, T, E>(
+pub(crate) fn watched<'py, T, E>(
     py: Python<'py>,
     (threads, progress, total): (usize, Option<Py<PyAny>>, u64),
     o: &DirOptions,
@@ -276,30 +276,5 @@ pub fn run_part<'py>(
     };
     watched(py, (threads, None, 0), &o, |options| {
         lidarsim::run::part::run_part(survey, &world, (k, n), out_dir, options)
-    })
-}
-
-/// Merges the parts in `part_dirs` into `out_dir` and returns the summary;
-/// `take_parts`: [`lidarsim::run::merge::Parts::Take`].
-pub fn merge<'py>(
-    py: Python<'py>,
-    part_dirs: Vec<std::path::PathBuf>,
-    out_dir: &Path,
-    threads: usize,
-    overwrite: bool,
-    take_parts: bool,
-) -> PyResult<Bound<'py, PyAny>> {
-    check_threads(threads)?;
-    let o = DirOptions {
-        overwrite,
-        ..DirOptions::default()
-    };
-    let taken = if take_parts {
-        lidarsim::run::merge::Parts::Take
-    } else {
-        lidarsim::run::merge::Parts::Keep
-    };
-    watched(py, (threads, None, 0), &o, |options| {
-        lidarsim::run::merge::merge(&part_dirs, out_dir, options, taken)
     })
 }

@@ -80,6 +80,11 @@ impl SurveyCore {
         Ok(world)
     }
 
+    /// The survey's world if it is built already.
+    pub(crate) fn built_world(&self) -> Option<Arc<World>> {
+        self.world.lock().expect("world lock").clone()
+    }
+
     fn from_text(
         py: Python<'_>,
         text: &str,

@@ -162,3 +162,101 @@ def test_parts_from_python_merge_and_bad_merges_are_refused(tmp_path):
     assert_same_run(tmp_path / "whole", tmp_path / "merged")
     with pytest.raises(ValueError, match="K must be from 1 to N"):
         s.run_part(tmp_path / "p4", 4, 3)
+
+
+def shed_survey(shed, seed=29):
+    """The survey with a shed read from the mesh file ``shed``."""
+    shed.write_text("v 15 -5 4\nv 25 -5 4\nv 25 5 4\nv 15 5 4\nf 1 2 3\nf 1 3 4\n")
+    mesh = f'[[mesh]]\nfile = "{shed}"\nmaterial = "roof"\nclass = "roof"\n'
+    return lidarsim.Survey.from_toml(
+        (SURVEY + LINES + mesh).replace("seed = 29", f"seed = {seed}")
+    )
+
+
+def test_a_merge_uses_the_built_world_of_the_parts_survey_and_no_other(tmp_path):
+    shed = tmp_path / "shed.obj"
+    s = shed_survey(shed)
+    not_built = shed_survey(shed)
+    s.run_to(tmp_path / "whole", threads=2, progress=False)
+    dirs = [tmp_path / f"p{k}" for k in (1, 2)]
+    for k, d in enumerate(dirs, start=1):
+        s.run_part(d, k, 2, threads=1)
+    other_seed = shed_survey(tmp_path / "other.obj", seed=30)
+    other_seed.build()
+    # With the scene's file gone, a merge that reads the scene again fails:
+    # one given no survey, a survey of another seed, or the parts' survey
+    # with no world built.
+    shed.unlink()
+    for i, given in enumerate([None, other_seed, not_built]):
+        with pytest.raises(OSError, match="shed.obj"):
+            lidarsim.merge(dirs, tmp_path / f"bad{i}", survey=given)
+    lidarsim.merge(dirs, tmp_path / "merged", survey=s)
+    assert_same_run(tmp_path / "whole", tmp_path / "merged")
+
+
+def test_a_distributed_run_merges_over_the_clients_world(client, tmp_path):
+    # The client's survey was built (by its unsplit run); the scene's file
+    # is removed once every part is done, so the merge reads no scene.
+    shed = tmp_path / "shed.obj"
+    s = shed_survey(shed)
+    s.run_to(tmp_path / "whole", threads=2, progress=False)
+
+    def progress(done, total, rate):
+        if done == total:
+            shed.unlink()
+
+    lidarsim.distributed.run(s, client, tmp_path / "merged", parts=3, progress=progress)
+    assert not shed.exists()
+    assert_same_run(tmp_path / "whole", tmp_path / "merged")
+
+
+def points_offset(las):
+    """The LAS header's offset to the point records (LAS 1.4, byte 96)."""
+    return int.from_bytes(las.read_bytes()[96:100], "little")
+
+
+def test_a_merge_joins_each_part_as_soon_as_the_parts_before_it(tmp_path):
+    # Plain LAS: the parts' own LAS files are joined.
+    s = lidarsim.Survey.from_toml(
+        SURVEY.replace('"las-waveform", "laz", "xyz"', '"las"') + LINES
+    )
+    s.run_to(tmp_path / "whole", threads=2, progress=False)
+    dirs = [tmp_path / f"p{k}" for k in (1, 2, 3)]
+    for k, d in enumerate(dirs, start=1):
+        s.run_part(d, k, 3, threads=1)
+    las = [d / "points.las" for d in dirs]
+    sizes = [p.stat().st_size for p in las]
+    records = [size - points_offset(p) for size, p in zip(sizes, las)]
+    out = tmp_path / "merged"
+    joined = out / "points.las.partial"
+    m = lidarsim._lidarsim.PartMerge(str(out))
+    # Part 3 waits for parts 1 and 2; part 1 then joins whole, and part 2
+    # with it: its point records after part 1's file.
+    m.add(str(dirs[2]))
+    assert not joined.exists()
+    m.add(str(dirs[0]))
+    assert joined.stat().st_size == sizes[0]
+    with pytest.raises(OSError, match="given twice"):
+        m.add(str(dirs[0]))
+    m.add(str(dirs[1]))
+    assert joined.stat().st_size == sizes[0] + records[1] + records[2]
+    m.finish(2)
+    assert not joined.exists()
+    assert_same_run(tmp_path / "whole", out)
+    with pytest.raises(ValueError, match="finished"):
+        m.finish(2)
+
+
+def test_a_merge_of_arriving_parts_refuses_a_foreign_or_missing_part(tmp_path):
+    s = survey()
+    other = survey().replace({}, seed=30)
+    for k in (1, 2):
+        s.run_part(tmp_path / f"p{k}", k, 3, threads=1)
+    other.run_part(tmp_path / "q3", 3, 3, threads=1)
+    m = lidarsim._lidarsim.PartMerge(str(tmp_path / "merged"))
+    m.add(str(tmp_path / "p1"))
+    with pytest.raises(OSError, match="q3.*is not of the run of .*p1"):
+        m.add(str(tmp_path / "q3"))
+    m.add(str(tmp_path / "p2"))
+    with pytest.raises(OSError, match="part 3/3 is missing"):
+        m.finish(2)

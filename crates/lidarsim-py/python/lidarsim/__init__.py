@@ -628,6 +628,7 @@ def merge(
     threads: Optional[int] = None,
     overwrite: bool = False,
     take_parts: bool = False,
+    survey: Optional[Survey] = None,
 ) -> Dict[str, Any]:
     """Merges the directories of the parts of one split run (in any order)
     into ``out_dir``: the files the unsplit run writes, byte for byte
@@ -635,11 +636,15 @@ def merge(
     an ``OSError`` naming it, a part missing, given twice, unfinished,
     changed, or of another survey, seed or number of parts. ``take_parts``:
     move the first part's LAS file into ``out_dir`` rather than copy it,
-    and remove the parts' directories once merged."""
+    and remove the parts' directories once merged. ``survey``: the survey
+    the parts ran; when its world is built (``Survey.build``, or a run of
+    it), the merge uses that world instead of reading and indexing the
+    scene again. A survey other than the parts' is not used."""
     return _lidarsim.merge(
         [os.fspath(p) for p in part_dirs],
         os.fspath(out_dir),
         _threads(threads),
         overwrite,
         take_parts,
+        survey._core if survey is not None else None,
     )

@@ -13,8 +13,18 @@ class SurveyError(ValueError):
     diagnostics: List[Dict[str, Any]]
 
 def merge(
-    part_dirs: List[str], out_dir: str, threads: int, overwrite: bool = False, take_parts: bool = False
+    part_dirs: List[str],
+    out_dir: str,
+    threads: int,
+    overwrite: bool = False,
+    take_parts: bool = False,
+    survey: Optional["SurveyCore"] = None,
 ) -> Dict[str, Any]: ...
+
+class PartMerge:
+    def __init__(self, out_dir: str, overwrite: bool = False, take_parts: bool = False) -> None: ...
+    def add(self, part_dir: str) -> None: ...
+    def finish(self, threads: int, survey: Optional["SurveyCore"] = None) -> Dict[str, Any]: ...
 
 class PointStream(Iterator["np.ndarray"]):
     pulses_done: int

@@ -17,7 +17,9 @@ a part whose worker dies is run again elsewhere, and a part that fails is
 retried. Parts write into a directory beside ``out`` that every worker
 sees (``shared=True``, the usual HPC setup) or, with ``shared=False``, into
 a worker's temporary directory whose files travel back to the client. The
-client then merges them into ``out``.
+client merges them into ``out`` as they arrive (a part's points are
+joined as soon as the parts before it are), over the survey's world,
+which it builds while the last parts run.
 
 The survey travels to the workers as its TOML text (file paths absolute:
 meshes, rasters and point clouds must be readable there) with any scene
@@ -31,11 +33,12 @@ import os
 import shutil
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 from typing import Any, Dict, Optional, Tuple, Union
 
-from . import Survey, merge
+from . import Survey, _lidarsim, _threads, merge
 
 __all__ = ["run", "merge"]
 
@@ -45,6 +48,13 @@ PathLike = Union[str, "os.PathLike[str]"]
 def _part_name(k: int, n: int) -> str:
     return f"part-{k:04d}-of-{n:04d}"
 
+
+#: Parts of a run for each part a cluster runs at once, by default. With
+#: one each, a worker slowed down (a busy host, a slower node) holds up the
+#: whole run; parts are cheap (a worker builds the survey's world once, and
+#: the client joins each part's points as it arrives), so a run is cut
+#: finer, into parts that workers take as they become free.
+PARTS_PER_SLOT = 8
 
 #: The last survey a worker process built, by the TOML text it came from:
 #: a worker that runs several parts of one survey reads and indexes its
@@ -102,8 +112,10 @@ def run(
     overwrite: bool = False,
     progress: Any = True,
 ) -> Dict[str, Any]:
-    """Runs ``survey`` split into ``parts`` parts (by default one per
-    worker thread of ``client``'s cluster) as tasks on ``client``, and
+    """Runs ``survey`` split into ``parts`` parts (by default
+    ``PARTS_PER_SLOT`` for each part the cluster runs at once, so that the
+    scheduler hands the last parts to the workers that are free first) as
+    tasks on ``client``, and
     merges them into ``out``: the files of ``survey.run_to(out)``, byte for
     byte (``summary.json``'s timings apart). Returns the merged run's
     summary.
@@ -120,14 +132,17 @@ def run(
     from distributed import as_completed
 
     out = Path(out)
+    threads = sum(client.nthreads().values()) or 1
     if parts is None:
-        threads = sum(client.nthreads().values()) or 1
-        parts = max(1, threads // max(1, threads_per_part))
+        parts = PARTS_PER_SLOT * max(1, threads // max(1, threads_per_part))
     if parts < 1:
         raise ValueError(f"parts must be at least 1, got {parts}")
     where = Path(parts_dir) if parts_dir is not None else out.with_name(out.name + ".parts")
     where = where.resolve()
     where.mkdir(parents=True, exist_ok=True)
+    # The merge claims the output at once (before any part runs), and joins
+    # the parts' points as they arrive.
+    merging = _lidarsim.PartMerge(os.fspath(out), overwrite, not keep_parts)
     spec = (survey.to_toml(), survey._data)
     token = f"{os.getpid()}-{time.monotonic_ns()}"
     futures = [
@@ -144,7 +159,12 @@ def run(
         )
         for k in range(1, parts + 1)
     ]
+    # The survey's world, for the merge: the client builds it while the
+    # last parts run, once a worker thread has no part left to take.
     report = _Report(progress, parts)
+    world = _WorldBuilder(survey)
+    if parts * threads_per_part < threads:
+        world.start()
     started = time.monotonic()
     slots = 0
     dirs: Dict[int, Path] = {}
@@ -163,8 +183,14 @@ def run(
                 dirs[k] = target
             else:
                 dirs[k] = Path(result["dir"])
+            # The part is done with: the scheduler need not run it again
+            # if the worker that holds its result dies.
+            futures.remove(future)
             slots += result["record"]["pulse_slots"]
             report(done, slots / max(time.monotonic() - started, 1e-9))
+            if (parts - done) * threads_per_part < threads:
+                world.start()
+            merging.add(os.fspath(dirs[k]))
     except BaseException:
         for f in futures:
             f.cancel()
@@ -173,15 +199,42 @@ def run(
         report.close()
     # Parts not kept are taken by the merge: the first one's LAS file is
     # moved rather than copied, and every part's directory removed.
-    summary = merge(
-        [dirs[k] for k in sorted(dirs)], out, overwrite=overwrite, take_parts=not keep_parts
-    )
+    summary = merging.finish(_threads(None), survey._core if world.built() else None)
     if not keep_parts:
         try:
             where.rmdir()
         except OSError:
             pass
     return summary
+
+
+class _WorldBuilder:
+    """Builds a survey's world on a thread of the client (the scene read
+    and indexed with the GIL released), for the merge to use."""
+
+    def __init__(self, survey: Survey) -> None:
+        self.survey = survey
+        self.thread: Optional[threading.Thread] = None
+        self.ok = False
+
+    def start(self) -> None:
+        if self.thread is None:
+            self.thread = threading.Thread(target=self._build, daemon=True)
+            self.thread.start()
+
+    def _build(self) -> None:
+        try:
+            self.survey.build()
+            self.ok = True
+        except Exception:  # noqa: BLE001 - the merge then builds the world itself
+            self.ok = False
+
+    def built(self) -> bool:
+        """Whether the world is built, once the thread is done."""
+        if self.thread is None:
+            return False
+        self.thread.join()
+        return self.ok
 
 
 class _Report:
