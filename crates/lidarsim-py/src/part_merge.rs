@@ -70,10 +70,18 @@ impl PartMerge {
     /// Adds the part in `part_dir` (checked against the parts before it)
     /// and joins what can be joined of the parts so far.
     fn add(&self, py: Python<'_>, part_dir: PathBuf) -> PyResult<()> {
-        let mut guard = self.merge.lock().unwrap_or_else(|e| e.into_inner());
-        let merge = guard.as_mut().ok_or_else(finished)?;
-        py.detach(|| merge.add(&part_dir))
-            .map_err(|e| PyOSError::new_err(e.to_string()))
+        // The lock is taken and given back with the GIL released: a thread
+        // that waits for it holding the GIL would keep this one from
+        // returning.
+        py.detach(|| {
+            let mut guard = self.merge.lock().unwrap_or_else(|e| e.into_inner());
+            let merge = guard.as_mut().ok_or(Added::Finished)?;
+            merge.add(&part_dir).map_err(Added::Refused)
+        })
+        .map_err(|e| match e {
+            Added::Finished => finished(),
+            Added::Refused(e) => PyOSError::new_err(e.to_string()),
+        })
     }
 
     /// Finishes the merge on `threads` threads, over the world of `survey`
@@ -86,11 +94,8 @@ impl PartMerge {
         survey: Option<PyRef<'py, SurveyCore>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         check_threads(threads)?;
-        let merge = self
-            .merge
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .take()
+        let merge = py
+            .detach(|| self.merge.lock().unwrap_or_else(|e| e.into_inner()).take())
             .ok_or_else(finished)?;
         let built = built(survey.as_deref());
         watched(py, (threads, None, 0), &DirOptions::default(), |options| {
@@ -98,6 +103,14 @@ impl PartMerge {
             merge.finish(options, built)
         })
     }
+}
+
+/// Why a part was not added.
+enum Added {
+    /// The merge is finished.
+    Finished,
+    /// The merge refused it.
+    Refused(lidarsim::run::RunError),
 }
 
 /// The error of a merge used after `finish`.
