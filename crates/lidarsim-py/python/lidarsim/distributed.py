@@ -54,7 +54,7 @@ def _part_name(k: int, n: int) -> str:
 #: whole run; parts are cheap (a worker builds the survey's world once, and
 #: the client joins each part's points as it arrives), so a run is cut
 #: finer, into parts that workers take as they become free.
-PARTS_PER_SLOT = 8
+PARTS_PER_SLOT = 16
 
 #: The last survey a worker process built, by the TOML text it came from:
 #: a worker that runs several parts of one survey reads and indexes its
