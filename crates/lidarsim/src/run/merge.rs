@@ -434,28 +434,31 @@ struct First {
     with_report: bool,
 }
 
-impl Gathered {
-    /// Adds the part in `dir` once its record and files agree with each
-    /// other and with the parts before it.
-    fn admit(&mut self, dir: &Path) -> Result<(), RunError> {
-        let (record, _) = read_part(dir)?;
-        let first = match &self.first {
-            Some(first) => first,
-            None => {
-                let survey_path = dir.join("survey.toml");
-                let survey = Survey::load(&survey_path)
-                    .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string()))?;
-                let with_report = stitched(&survey);
-                self.first.insert(First {
-                    dir: dir.to_path_buf(),
-                    record: record.clone(),
-                    survey,
-                    points_file: if with_report { PART_LAS } else { PART_POINTS },
-                    with_report,
-                })
-            }
-        };
-        let r0 = &first.record;
+impl First {
+    /// The first part, in `dir` with its `record`, and its survey.
+    fn read(dir: &Path, record: &PartRecord) -> Result<Self, RunError> {
+        let survey_path = dir.join("survey.toml");
+        let survey = Survey::load(&survey_path)
+            .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string()))?;
+        let with_report = stitched(&survey);
+        Ok(First {
+            dir: dir.to_path_buf(),
+            record: record.clone(),
+            survey,
+            points_file: if with_report { PART_LAS } else { PART_POINTS },
+            with_report,
+        })
+    }
+
+    /// Refuses the part in `dir` with `record` if it is not of the first
+    /// part's run, or one of `parts` already.
+    fn check(
+        &self,
+        parts: &[(PathBuf, PartRecord)],
+        dir: &Path,
+        record: &PartRecord,
+    ) -> Result<(), RunError> {
+        let r0 = &self.record;
         let foreign = |what: String| {
             error(
                 dir,
@@ -464,7 +467,7 @@ impl Gathered {
                     "part {}/{} is not of the run of {}: {what}",
                     record.part,
                     record.parts,
-                    first.dir.display()
+                    self.dir.display()
                 ),
             )
         };
@@ -486,7 +489,7 @@ impl Gathered {
                 record.lidarsim_version, r0.lidarsim_version
             )));
         }
-        if let Some((other, _)) = self.parts.iter().find(|(_, r)| r.part == record.part) {
+        if let Some((other, _)) = parts.iter().find(|(_, r)| r.part == record.part) {
             return Err(error(
                 dir,
                 io::ErrorKind::InvalidData,
@@ -499,8 +502,7 @@ impl Gathered {
                 ),
             ));
         }
-        if record.points_file != first.points_file || (record.report_bytes > 0) != first.with_report
-        {
+        if record.points_file != self.points_file || (record.report_bytes > 0) != self.with_report {
             return Err(error(
                 dir,
                 io::ErrorKind::InvalidData,
@@ -509,14 +511,32 @@ impl Gathered {
                     record.part,
                     record.parts,
                     record.points_file,
-                    first.points_file,
-                    if first.with_report {
+                    self.points_file,
+                    if self.with_report {
                         " and report.state"
                     } else {
                         ""
                     }
                 ),
             ));
+        }
+        Ok(())
+    }
+}
+
+impl Gathered {
+    /// Adds the part in `dir` once its record and files agree with each
+    /// other and with the parts before it; a part refused leaves them as
+    /// they were.
+    fn admit(&mut self, dir: &Path) -> Result<(), RunError> {
+        let (record, _) = read_part(dir)?;
+        match &self.first {
+            Some(first) => first.check(&self.parts, dir, &record)?,
+            None => {
+                let first = First::read(dir, &record)?;
+                first.check(&self.parts, dir, &record)?;
+                self.first = Some(first);
+            }
         }
         self.parts.push((dir.to_path_buf(), record));
         Ok(())
