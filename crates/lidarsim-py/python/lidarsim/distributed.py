@@ -159,9 +159,9 @@ def run(
         )
         for k in range(1, parts + 1)
     ]
+    report = _Report(progress, parts)
     # The survey's world, for the merge: the client builds it while the
     # last parts run, once a worker thread has no part left to take.
-    report = _Report(progress, parts)
     world = _WorldBuilder(survey)
     if parts * threads_per_part < threads:
         world.start()
