@@ -43,9 +43,9 @@ pub struct PartInput {
     pub wall_time_s: f64,
 }
 
-/// A part directory's record and survey text, checked against its own
-/// files.
-fn read_part(dir: &Path) -> Result<(PartRecord, String), RunError> {
+/// A part directory's record, checked against its own files (its survey
+/// text by hash, its point and report files by length).
+fn read_part(dir: &Path) -> Result<PartRecord, RunError> {
     let path = dir.join(PART_RECORD);
     let bytes = std::fs::read(&path).map_err(|e| {
         error(
@@ -125,7 +125,7 @@ fn read_part(dir: &Path) -> Result<(PartRecord, String), RunError> {
             ));
         }
     }
-    Ok((record, text))
+    Ok(record)
 }
 
 /// What a merge does with its parts.
@@ -529,7 +529,7 @@ impl Gathered {
     /// other and with the parts before it; a part refused leaves them as
     /// they were.
     fn admit(&mut self, dir: &Path) -> Result<(), RunError> {
-        let (record, _) = read_part(dir)?;
+        let record = read_part(dir)?;
         match &self.first {
             Some(first) => first.check(&self.parts, dir, &record)?,
             None => {
