@@ -258,6 +258,77 @@ impl OutFile {
     pub fn file_mut(&mut self) -> &mut File {
         &mut self.file
     }
+
+    /// Copies what `from` holds after its position to this file's end,
+    /// writeback started as for any write. Returns the bytes copied.
+    fn copy_rest(&mut self, from: &mut File) -> io::Result<u64> {
+        let mut copied = 0;
+        #[cfg(target_os = "linux")]
+        loop {
+            match self.copy_in_kernel(from) {
+                Ok(0) => return Ok(copied),
+                Ok(n) => copied += n,
+                // A file system (or kernel) that cannot copy between these
+                // two files: the bytes go through this process instead.
+                Err(e) if copied == 0 && cannot_copy_in_kernel(&e) => break,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        let mut buf = vec![0u8; COPY_BYTES];
+        loop {
+            let n = match std::io::Read::read(from, &mut buf) {
+                Ok(0) => return Ok(copied),
+                Ok(n) => n,
+                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(e),
+            };
+            self.write_all(&buf[..n])?;
+            copied += n as u64;
+        }
+    }
+
+    /// Up to `COPY_BYTES` of `from`, from its position, copied to this
+    /// file's end by the kernel (Linux `copy_file_range`): the bytes do
+    /// not pass through this process, and a file system that shares
+    /// blocks between files (XFS, Btrfs) shares them rather than copying.
+    #[cfg(target_os = "linux")]
+    fn copy_in_kernel(&mut self, from: &mut File) -> io::Result<u64> {
+        use std::os::fd::AsRawFd;
+        // SAFETY: a system call on two open descriptors this process owns,
+        // with null offsets (each file's own position is used and moved);
+        // it touches no memory of this process.
+        let n = unsafe {
+            libc::copy_file_range(
+                from.as_raw_fd(),
+                std::ptr::null_mut(),
+                self.file.as_raw_fd(),
+                std::ptr::null_mut(),
+                COPY_BYTES,
+                0,
+            )
+        };
+        let n = u64::try_from(n).map_err(|_| io::Error::last_os_error())?;
+        self.pos += n;
+        if self.pos >= self.started + WRITEBACK_BYTES {
+            self.start_writeback();
+        }
+        Ok(n)
+    }
+}
+
+/// Bytes copied at a time by [`OutFile::copy_rest`].
+const COPY_BYTES: usize = 1 << 20;
+
+/// Whether `e`, from `copy_file_range` before any byte was copied, says
+/// that these files cannot be copied by the kernel (other file systems on
+/// an older kernel, a file system without the call, a special file).
+#[cfg(target_os = "linux")]
+fn cannot_copy_in_kernel(e: &io::Error) -> bool {
+    matches!(
+        e.raw_os_error(),
+        Some(libc::EXDEV | libc::ENOSYS | libc::EOPNOTSUPP | libc::EINVAL | libc::EPERM)
+    )
 }
 
 impl Seek for OutFile {
@@ -396,6 +467,15 @@ impl AtomicFile {
         let w = self.writer();
         w.flush()?;
         w.get_mut().write_all(bytes)
+    }
+
+    /// Appends what `from` holds after its position (the rest of another
+    /// file, copied by the kernel where it can: [`OutFile`]); returns the
+    /// bytes appended.
+    pub fn append_rest_of(&mut self, from: &mut File) -> io::Result<u64> {
+        let w = self.writer();
+        w.flush()?;
+        w.get_mut().copy_rest(from)
     }
 
     /// Lends the buffered writer out (to a compressor that owns its output);
@@ -573,6 +653,40 @@ mod tests {
         assert!(!dir.join("a.txt.partial").exists());
         write_atomic(&target, b"whole").unwrap();
         assert_eq!(std::fs::read(&target).unwrap(), b"whole");
+        std::fs::remove_dir_all(&dir).ok();
+    }
+
+    /// Another file's rest appended after buffered bytes, by the kernel
+    /// from a regular file and through the process from a pipe (which the
+    /// kernel's copy refuses), leaves exactly those bytes, in order, and
+    /// later writes go after them.
+    #[test]
+    #[cfg(unix)]
+    fn appended_files_follow_the_bytes_written() {
+        let dir = std::env::temp_dir().join(format!("lidarsim-append-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let source = dir.join("source.bin");
+        let len = 2 * COPY_BYTES + 4321;
+        let bytes: Vec<u8> = (0..len).map(|i| (i * 13 + i / 509) as u8).collect();
+        std::fs::write(&source, &bytes).unwrap();
+        let target = dir.join("joined.bin");
+        let mut f = AtomicFile::create(&target).unwrap();
+        f.writer().write_all(b"head").unwrap();
+        let mut from = File::open(&source).unwrap();
+        from.seek(SeekFrom::Start(100)).unwrap();
+        assert_eq!(f.append_rest_of(&mut from).unwrap(), (len - 100) as u64);
+        let (reader, mut writer) = std::io::pipe().unwrap();
+        let feeding = std::thread::spawn(move || writer.write_all(b"from a pipe").unwrap());
+        let mut pipe = File::from(std::os::fd::OwnedFd::from(reader));
+        assert_eq!(f.append_rest_of(&mut pipe).unwrap(), 11);
+        feeding.join().unwrap();
+        f.writer().write_all(b"tail").unwrap();
+        f.commit().unwrap();
+        let mut want = b"head".to_vec();
+        want.extend_from_slice(&bytes[100..]);
+        want.extend_from_slice(b"from a pipe");
+        want.extend_from_slice(b"tail");
+        assert!(std::fs::read(&target).unwrap() == want);
         std::fs::remove_dir_all(&dir).ok();
     }
 

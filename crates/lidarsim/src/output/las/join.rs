@@ -49,8 +49,6 @@ pub struct LasJoin {
     path: PathBuf,
     /// The parts joined so far, in `joined`'s file.
     joined: Option<JoinedLas>,
-    /// The copy's buffer.
-    buf: Vec<u8>,
 }
 
 impl LasJoin {
@@ -59,7 +57,6 @@ impl LasJoin {
         Self {
             path: path.to_path_buf(),
             joined: None,
-            buf: Vec::new(),
         }
     }
 
@@ -104,24 +101,18 @@ impl LasJoin {
         let (mut f, records) = signature(part)?;
         let start = if joined.parts.is_empty() { 0 } else { records };
         f.seek(SeekFrom::Start(start)).map_err(named)?;
-        if self.buf.is_empty() {
-            self.buf = vec![0u8; LAS_WRITE_BYTES];
-        }
-        let mut copied = start;
-        loop {
-            let n = match f.read(&mut self.buf) {
-                Ok(0) => break,
-                Ok(n) => n,
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
-                Err(e) => return Err(named(e)),
-            };
-            joined
-                .file
-                .write_unbuffered(&self.buf[..n])
-                .map_err(|e| joined.file.error(e))?;
-            joined.len += n as u64;
-            copied += n as u64;
-        }
+        // The kernel's copy does not say which side failed: both are named.
+        let appended = joined.file.append_rest_of(&mut f).map_err(|e| {
+            named(io::Error::new(
+                e.kind(),
+                format!(
+                    "cannot append it to '{}': {e}",
+                    AtomicFile::partial_of(joined.file.path()).display()
+                ),
+            ))
+        })?;
+        joined.len += appended;
+        let copied = start + appended;
         joined.parts.push(Joined {
             named: part.to_path_buf(),
             header: part.to_path_buf(),
