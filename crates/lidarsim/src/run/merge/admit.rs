@@ -1,0 +1,285 @@
+//! The parts given to a merge admitted one at a time: each directory's
+//! record read and checked against the part's own files, then against
+//! the first part admitted (the same survey, seed, number of parts and
+//! lidarsim version, and no part twice); at the end, no part missing.
+
+use std::io;
+use std::path::{Path, PathBuf};
+
+use super::super::RunError;
+use super::super::part::{PART_LAS, PART_POINTS, PART_RECORD, PartRecord, error, stitched};
+use super::super::resume::fnv1a_hex;
+use crate::survey::Survey;
+
+/// A part directory's record, checked against its own files (its survey
+/// text by hash, its point and report files by length).
+fn read_part(dir: &Path) -> Result<PartRecord, RunError> {
+    let path = dir.join(PART_RECORD);
+    let bytes = std::fs::read(&path).map_err(|e| {
+        error(
+            dir,
+            e.kind(),
+            format!(
+                "not the directory of a part (no readable {PART_RECORD}: {e}); write parts with \
+                 `lidarsim run SURVEY --part K/N -o DIR`"
+            ),
+        )
+    })?;
+    let record: PartRecord = serde_json::from_slice(&bytes).map_err(|e| {
+        error(
+            &path,
+            io::ErrorKind::InvalidData,
+            format!("is not a part's record: {e}"),
+        )
+    })?;
+    if !record.complete {
+        return Err(error(
+            dir,
+            io::ErrorKind::InvalidData,
+            format!(
+                "part {}/{} did not finish (its record says \"complete\": false): run it again",
+                record.part, record.parts
+            ),
+        ));
+    }
+    let survey_path = dir.join("survey.toml");
+    let text = std::fs::read_to_string(&survey_path).map_err(|e| {
+        error(
+            &survey_path,
+            e.kind(),
+            format!("cannot read the part's survey: {e}"),
+        )
+    })?;
+    if fnv1a_hex(text.as_bytes()) != record.survey_fnv1a {
+        return Err(error(
+            &survey_path,
+            io::ErrorKind::InvalidData,
+            "was changed after the part ran (its hash is not the one the part recorded)".into(),
+        ));
+    }
+    if ![PART_POINTS, PART_LAS].contains(&record.points_file.as_str()) {
+        return Err(error(
+            &path,
+            io::ErrorKind::InvalidData,
+            format!(
+                "names its points {:?}, which is neither {PART_POINTS} nor {PART_LAS}",
+                record.points_file
+            ),
+        ));
+    }
+    let mut files = vec![(record.points_file.as_str(), record.points_bytes)];
+    if record.report_bytes > 0 {
+        files.push((super::super::REPORT_STATE, record.report_bytes));
+    }
+    for (name, bytes) in files {
+        let file = dir.join(name);
+        let len = std::fs::metadata(&file)
+            .map_err(|e| {
+                error(
+                    &file,
+                    e.kind(),
+                    format!("cannot read the part's {name}: {e}"),
+                )
+            })?
+            .len();
+        if len != bytes {
+            return Err(error(
+                &file,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "holds {len} bytes, but part {}/{} wrote {bytes}: it was cut short or changed",
+                    record.part, record.parts
+                ),
+            ));
+        }
+    }
+    Ok(record)
+}
+
+/// The refusal of a merge given no part.
+fn no_part(out_dir: &Path) -> RunError {
+    error(
+        out_dir,
+        io::ErrorKind::InvalidInput,
+        "no part to merge".into(),
+    )
+}
+
+/// The parts of a merge so far, each checked against the first.
+#[derive(Debug, Default)]
+pub(super) struct Gathered {
+    /// The first part admitted.
+    pub(super) first: Option<First>,
+    /// Every part admitted, in the order of admission.
+    pub(super) parts: Vec<(PathBuf, PartRecord)>,
+}
+
+/// What the first part added to a merge says of them all.
+#[derive(Debug)]
+pub(super) struct First {
+    /// Its directory.
+    dir: PathBuf,
+    /// Its record.
+    pub(super) record: PartRecord,
+    /// Its survey (read to know how its parts are joined).
+    pub(super) survey: Survey,
+    /// The point file every part holds.
+    points_file: &'static str,
+    /// Whether the parts are stitched ([`stitched`]): their LAS files
+    /// joined as they are, their reports' states kept.
+    pub(super) with_report: bool,
+}
+
+impl First {
+    /// The first part, in `dir` with its `record`, and its survey.
+    fn read(dir: &Path, record: &PartRecord) -> Result<Self, RunError> {
+        let survey_path = dir.join("survey.toml");
+        let survey = Survey::load(&survey_path)
+            .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string()))?;
+        let with_report = stitched(&survey);
+        Ok(First {
+            dir: dir.to_path_buf(),
+            record: record.clone(),
+            survey,
+            points_file: if with_report { PART_LAS } else { PART_POINTS },
+            with_report,
+        })
+    }
+
+    /// Refuses the part in `dir` with `record` if it is not of the first
+    /// part's run, or one of `parts` already.
+    fn check(
+        &self,
+        parts: &[(PathBuf, PartRecord)],
+        dir: &Path,
+        record: &PartRecord,
+    ) -> Result<(), RunError> {
+        let r0 = &self.record;
+        let foreign = |what: String| {
+            error(
+                dir,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "part {}/{} is not of the run of {}: {what}",
+                    record.part,
+                    record.parts,
+                    self.dir.display()
+                ),
+            )
+        };
+        if record.survey_fnv1a != r0.survey_fnv1a {
+            return Err(foreign("its survey.toml differs".into()));
+        }
+        if record.seed != r0.seed {
+            return Err(foreign(format!("seed {} against {}", record.seed, r0.seed)));
+        }
+        if record.parts != r0.parts {
+            return Err(foreign(format!(
+                "one of {} parts, not {}",
+                record.parts, r0.parts
+            )));
+        }
+        if record.lidarsim_version != r0.lidarsim_version {
+            return Err(foreign(format!(
+                "lidarsim {} against {}",
+                record.lidarsim_version, r0.lidarsim_version
+            )));
+        }
+        if let Some((other, _)) = parts.iter().find(|(_, r)| r.part == record.part) {
+            return Err(error(
+                dir,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "part {}/{} is given twice: {} and {}",
+                    record.part,
+                    record.parts,
+                    other.display(),
+                    dir.display()
+                ),
+            ));
+        }
+        if record.points_file != self.points_file || (record.report_bytes > 0) != self.with_report {
+            return Err(error(
+                dir,
+                io::ErrorKind::InvalidData,
+                format!(
+                    "part {}/{} holds {}, but the parts of its survey hold {}{}",
+                    record.part,
+                    record.parts,
+                    record.points_file,
+                    self.points_file,
+                    if self.with_report {
+                        " and report.state"
+                    } else {
+                        ""
+                    }
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Gathered {
+    /// Adds the part in `dir` once its record and files agree with each
+    /// other and with the parts before it; a part refused leaves them as
+    /// they were.
+    pub(super) fn admit(&mut self, dir: &Path) -> Result<(), RunError> {
+        let record = read_part(dir)?;
+        match &self.first {
+            Some(first) => first.check(&self.parts, dir, &record)?,
+            None => {
+                let first = First::read(dir, &record)?;
+                first.check(&self.parts, dir, &record)?;
+                self.first = Some(first);
+            }
+        }
+        self.parts.push((dir.to_path_buf(), record));
+        Ok(())
+    }
+
+    /// Part `k`, if it is added.
+    pub(super) fn part(&self, k: usize) -> Option<(&Path, &PartRecord)> {
+        self.parts
+            .iter()
+            .find(|(_, r)| r.part == k)
+            .map(|(d, r)| (d.as_path(), r))
+    }
+
+    /// The first part and every part, unless [`Gathered::missing`]
+    /// refuses them.
+    pub(super) fn complete(
+        self,
+        out_dir: &Path,
+    ) -> Result<(First, Vec<(PathBuf, PartRecord)>), RunError> {
+        self.missing(out_dir)?;
+        match self.first {
+            Some(first) => Ok((first, self.parts)),
+            None => Err(no_part(out_dir)),
+        }
+    }
+
+    /// Refuses a merge of no part or with a part missing.
+    pub(super) fn missing(&self, out_dir: &Path) -> Result<(), RunError> {
+        let Some(first) = &self.first else {
+            return Err(no_part(out_dir));
+        };
+        let n = first.record.parts;
+        let missing: Vec<String> = (1..=n)
+            .filter(|&k| self.part(k).is_none())
+            .map(|k| format!("{k}/{n}"))
+            .collect();
+        if missing.is_empty() {
+            return Ok(());
+        }
+        let which = match missing.as_slice() {
+            [one] => format!("part {one} is"),
+            many => format!("parts {} are", many.join(", ")),
+        };
+        Err(error(
+            out_dir,
+            io::ErrorKind::NotFound,
+            format!("{which} missing: a merge needs all {n} parts"),
+        ))
+    }
+}
