@@ -147,6 +147,19 @@ pub struct MergeArgs {
     /// merged.
     #[arg(long)]
     pub take_parts: bool,
+    /// Start before the parts finish: the part directories need not exist
+    /// yet, and each part is joined as soon as its record says it
+    /// finished (for a merge job that runs beside its job array).
+    #[arg(long)]
+    pub follow: bool,
+    /// With --follow: seconds between two looks at the parts not finished.
+    #[arg(long, value_name = "SECONDS", default_value_t = 2.0, requires = "follow",
+          value_parser = seconds_parser())]
+    pub poll_seconds: f64,
+    /// With --follow: give up (exit non-zero, naming the parts not
+    /// finished) after this many seconds without a part finishing.
+    #[arg(long, value_name = "SECONDS", requires = "follow", value_parser = seconds_parser())]
+    pub give_up_after: Option<f64>,
 }
 
 /// The options of `lidarsim check`.
@@ -235,4 +248,23 @@ pub struct BenchArgs {
 /// Seeds a survey file can hold: TOML integers are signed 64-bit.
 fn seed_parser() -> clap::builder::RangedU64ValueParser<u64> {
     clap::value_parser!(u64).range(..=i64::MAX as u64)
+}
+
+/// A duration in seconds: a finite number, at least 0.01 and at most a
+/// year.
+fn seconds_parser() -> impl clap::builder::TypedValueParser<Value = f64> {
+    use clap::builder::TypedValueParser;
+    clap::builder::StringValueParser::new().try_map(|text: String| {
+        let s: f64 = text
+            .trim()
+            .parse()
+            .map_err(|_| format!("{text:?} is not a number of seconds"))?;
+        if (0.01..=3.2e7).contains(&s) {
+            Ok(s)
+        } else {
+            Err(format!(
+                "{text} s is out of range: give 0.01 to 32000000 seconds"
+            ))
+        }
+    })
 }

@@ -4,10 +4,11 @@
 
 use std::path::Path;
 use std::process::ExitCode;
+use std::time::Duration;
 
 use lidarsim::Survey;
 use lidarsim::run::RunOptions;
-use lidarsim::run::merge::{Parts, merge as merge_parts};
+use lidarsim::run::merge::{Follow, Parts, merge as merge_parts, merge_following};
 use lidarsim::run::part::{part_ranges, run_part as simulate_part};
 use lidarsim::world::World;
 
@@ -77,6 +78,9 @@ pub fn merge(args: MergeArgs) -> ExitCode {
         overwrite,
         no_space_check,
         take_parts,
+        follow,
+        poll_seconds,
+        give_up_after,
     } = args;
     let threads = match threads_or_all(threads) {
         Ok(t) => t,
@@ -85,12 +89,22 @@ pub fn merge(args: MergeArgs) -> ExitCode {
     let bar = pulse_bar(0);
     let progress = |done: u64| bar.set_position(done);
     let options = RunOptions {
+        stop: follow.then_some(&STOP),
         overwrite,
         no_space_check,
         ..RunOptions::new(threads, &progress)
     };
     let taken = if take_parts { Parts::Take } else { Parts::Keep };
-    let result = merge_parts(&parts, &output, &options, taken);
+    let result = if follow {
+        let follow = Follow {
+            poll: Duration::from_secs_f64(poll_seconds),
+            give_up_after: give_up_after.map(Duration::from_secs_f64),
+        };
+        let added = |k: usize, n: usize| bar.suspend(|| note!("part {k} of {n} joined"));
+        merge_following(&parts, &output, &options, taken, &follow, &added)
+    } else {
+        merge_parts(&parts, &output, &options, taken)
+    };
     bar.finish_and_clear();
     match result {
         Ok(summary) => {

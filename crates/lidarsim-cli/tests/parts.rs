@@ -311,6 +311,121 @@ fn stitched_las_parts_are_the_unsplit_run_byte_for_byte() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `lidarsim merge --follow` started before any part exists, its part
+/// directories given in advance.
+fn follower(out: &Path, parts: &[PathBuf], extra: &[&str]) -> std::process::Child {
+    let mut args = vec!["merge", "--follow", "--poll-seconds", "0.05", "-o", s(out)];
+    args.extend_from_slice(extra);
+    args.extend(parts.iter().map(|p| s(p)));
+    bin()
+        .args(&args)
+        .env("SOURCE_DATE_EPOCH", EPOCH)
+        .stderr(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// A merge started before its parts (`--follow`), which then run one
+/// after another in any order, writes the unsplit run's files: parts read
+/// back whole (every format) and parts whose LAS files are joined (LAS
+/// only, taken: moved and removed).
+#[test]
+fn a_merge_that_follows_its_parts_is_the_unsplit_run() {
+    let dir = temp("parts-follow");
+    let las_only = SURVEY.replace(
+        r#"formats = ["las-waveform", "laz", "ply", "xyz"]"#,
+        r#"formats = ["las"]"#,
+    );
+    for (name, text, take) in [("all", SURVEY.to_string(), false), ("las", las_only, true)] {
+        let here = dir.join(name);
+        std::fs::create_dir_all(&here).unwrap();
+        let survey = here.join("survey.toml");
+        std::fs::write(&survey, &text).unwrap();
+        let whole = here.join("whole");
+        ok(&lidarsim(&["run", s(&survey), "-o", s(&whole)]));
+        let dirs: Vec<PathBuf> = (1..=3).map(|k| here.join(format!("p3-{k}"))).collect();
+        let merged = here.join("merged");
+        // A safety net only: the parts below end in seconds.
+        let mut extra = vec!["--give-up-after", "600"];
+        if take {
+            extra.push("--take-parts");
+        }
+        let child = follower(&merged, &dirs, &extra);
+        run_parts(&here, &survey, 3, &[2, 3, 1]);
+        let o = child.wait_with_output().unwrap();
+        ok(&o);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(e.contains("part 3 of 3 joined"), "{e}");
+        for f in SAME {
+            let (a, b) = (whole.join(f), merged.join(f));
+            assert_eq!(a.exists(), b.exists(), "{name}: {f}");
+            if a.exists() {
+                assert!(
+                    std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(),
+                    "{name}: {f} differs"
+                );
+            }
+        }
+        assert_eq!(summary(&whole), summary(&merged), "{name}: summary.json");
+        for d in &dirs {
+            assert_eq!(d.exists(), !take, "{name}: {}", d.display());
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A merge following its parts gives up after the time given without a
+/// part finishing, naming the parts it waited for, and refuses a part of
+/// another run as soon as it finishes; neither leaves merged files.
+#[test]
+fn a_merge_that_follows_its_parts_gives_up_or_refuses_with_the_reason() {
+    let dir = temp("parts-follow-bad");
+    let survey = dir.join("survey.toml");
+    std::fs::write(&survey, SURVEY).unwrap();
+    let done = run_parts(&dir, &survey, 2, &[1]);
+    let never = dir.join("p2-2");
+    let merged = dir.join("merged");
+    let failed = |child: std::process::Child| {
+        let o = child.wait_with_output().unwrap();
+        assert!(!o.status.success());
+        let e = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(!e.contains("panicked"), "{e}");
+        assert!(!merged.join("points.las").exists() && !merged.join("summary.json").exists());
+        e
+    };
+    let parts = [done[0].clone(), never.clone()];
+    let e = failed(follower(&merged, &parts, &["--give-up-after", "0.3"]));
+    assert!(
+        e.contains("gave up after 0.3 s") && e.contains(s(&never)) && !e.contains(s(&done[0])),
+        "{e}"
+    );
+    // Part 2 of another seed: refused once it finished, without waiting
+    // for the time to give up.
+    let other = dir.join("other.toml");
+    std::fs::write(&other, SURVEY.replace("seed = 17", "seed = 18")).unwrap();
+    let foreign = dir.join("foreign");
+    ok(&lidarsim(&[
+        "run",
+        s(&other),
+        "--part",
+        "2/2",
+        "-o",
+        s(&foreign),
+    ]));
+    let parts = [done[0].clone(), foreign];
+    let e = failed(follower(
+        &merged,
+        &parts,
+        &["--overwrite", "--give-up-after", "600"],
+    ));
+    assert!(
+        e.contains(&format!("{}: part 2/2 is not of the run", s(&parts[1]))),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// A merge that cannot build its survey's world (a scene file changed since
 /// the parts ran) is refused, naming the file, and leaves the earlier run
 /// in its output directory as it was.

@@ -11,15 +11,19 @@ use common::{GOOD, temp};
 
 /// A stand-in for `sbatch`: runs the script at once, once per task of
 /// `--array=1-N` with `SLURM_ARRAY_TASK_ID` set, after checking that a
-/// `--dependency=afterok:ID` names a job it ran; prints the job id
-/// (`--parsable`).
+/// `--dependency=afterok:ID` or `after:ID` names a job it ran; prints the
+/// job id (`--parsable`). A job `--dependency=afternotok:ID` on a job that
+/// succeeded never runs (`--kill-on-invalid-dep`): it is listed in
+/// `never`.
 const SBATCH: &str = r#"#!/usr/bin/env bash
 set -euo pipefail
-array=""; dep=""; cpus=1; args=()
+array=""; dep=""; notok=""; cpus=1; args=()
 for a in "$@"; do
   case "$a" in
     --array=*) array=${a#--array=} ;;
     --dependency=afterok:*) dep=${a#--dependency=afterok:} ;;
+    --dependency=after:*) dep=${a#--dependency=after:} ;;
+    --dependency=afternotok:*) notok=${a#--dependency=afternotok:} ;;
     --cpus-per-task=*) cpus=${a#--cpus-per-task=} ;;
     --parsable) ;;
     --*) ;;
@@ -31,6 +35,13 @@ if [ -n "$dep" ] && ! grep -qx "$dep" "$state/done"; then
   echo "dependency $dep did not complete" >&2; exit 1
 fi
 id=$(( $(wc -l < "$state/done") + 100 ))
+if [ -n "$notok" ]; then
+  grep -qx "$notok" "$state/done" || { echo "no job $notok" >&2; exit 1; }
+  echo "$id $*" >> "$state/never"
+  echo "$id" >> "$state/done"
+  echo "$id"
+  exit 0
+fi
 if [ -n "$array" ]; then
   for k in $(seq "${array%-*}" "${array#*-}"); do
     SLURM_ARRAY_TASK_ID=$k SLURM_CPUS_PER_TASK=$cpus bash "${args[@]}" >> "$state/log" 2>&1
@@ -48,7 +59,28 @@ fn scripts() -> PathBuf {
 
 #[test]
 fn the_slurm_scripts_run_parts_and_merge_into_the_unsplit_run() {
-    let dir = temp("slurm");
+    submit_and_compare("slurm", false);
+}
+
+/// With FOLLOW=1 the merge starts with the array (`after`, not
+/// `afterok`) and follows the parts (`lidarsim merge --follow`); a job
+/// that would cancel it if a part failed is submitted beside it.
+#[test]
+fn a_following_slurm_merge_is_the_unsplit_run() {
+    let (log, never) = submit_and_compare("slurm-follow", true);
+    assert!(log.contains("part 3 of 3 joined"), "{log}");
+    assert!(
+        never.contains("--dependency=afternotok:100") && never.contains("scancel 101"),
+        "{never}"
+    );
+}
+
+/// Submits a three-line survey as three parts and their merge through
+/// `submit.sh` (`FOLLOW` set when `follow`), under the stand-in `sbatch`,
+/// and checks the merged files against an unsplit run; returns the jobs'
+/// log and the jobs that never ran.
+fn submit_and_compare(name: &str, follow: bool) -> (String, String) {
+    let dir = temp(name);
     let survey = dir.join("survey.toml");
     // Three lines: three parts of whole lines.
     let text = GOOD.replace(
@@ -75,7 +107,13 @@ fn the_slurm_scripts_run_parts_and_merge_into_the_unsplit_run() {
         std::env::var("PATH").unwrap_or_default()
     );
     let out = dir.join("campaign");
-    let o = std::process::Command::new("bash")
+    let mut submit = std::process::Command::new("bash");
+    if follow {
+        submit.env("FOLLOW", "1");
+    } else {
+        submit.env_remove("FOLLOW");
+    }
+    let o = submit
         .arg(scripts().join("submit.sh"))
         .arg(&survey)
         .arg(&out)
@@ -113,5 +151,8 @@ fn the_slurm_scripts_run_parts_and_merge_into_the_unsplit_run() {
             "{f} differs"
         );
     }
+    let never = std::fs::read_to_string(state.join("never")).unwrap_or_default();
+    assert_eq!(never.is_empty(), !follow, "{never}");
     std::fs::remove_dir_all(&dir).ok();
+    (log, never)
 }

@@ -11,6 +11,16 @@ use super::super::part::{PART_LAS, PART_POINTS, PART_RECORD, PartRecord, error, 
 use super::super::resume::fnv1a_hex;
 use crate::survey::Survey;
 
+/// Whether the part in `dir` is done with: its record is there and says
+/// it is complete, or is no part's record at all (for [`read_part`] to
+/// refuse). A part writes its record last, whole: a directory without
+/// one, or whose part was stopped early, may still be written.
+pub(super) fn finished(dir: &Path) -> bool {
+    std::fs::read(dir.join(PART_RECORD)).is_ok_and(|bytes| {
+        serde_json::from_slice::<PartRecord>(&bytes).map_or(true, |record| record.complete)
+    })
+}
+
 /// A part directory's record, checked against its own files (its survey
 /// text by hash, its point and report files by length).
 fn read_part(dir: &Path) -> Result<PartRecord, RunError> {

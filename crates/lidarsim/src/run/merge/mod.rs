@@ -22,10 +22,12 @@ use std::path::{Path, PathBuf};
 
 mod admit;
 mod feed;
+mod follow;
 
 use admit::{First, Gathered};
 pub(crate) use feed::gather;
 use feed::miscounted;
+pub use follow::{Follow, merge_following};
 
 use super::part::{PART_LAS, error, part_ranges};
 use super::resume::fnv1a_hex;
