@@ -9,6 +9,8 @@
 //! interrupted or failed run never leaves a file that looks finished.
 
 pub mod crs;
+#[cfg(target_os = "linux")]
+mod direct;
 mod las;
 pub mod layout;
 pub mod part;
@@ -470,11 +472,16 @@ impl AtomicFile {
     }
 
     /// Appends what `from` holds after its position (the rest of another
-    /// file, copied by the kernel where it can: [`OutFile`]); returns the
-    /// bytes appended.
+    /// file): on Linux written direct to the device, past the page cache
+    /// (`direct.rs`), else copied by the kernel where it can
+    /// ([`OutFile`]); returns the bytes appended.
     pub fn append_rest_of(&mut self, from: &mut File) -> io::Result<u64> {
-        let w = self.writer();
+        let w = self.writer.as_mut().expect("writer present until commit");
         w.flush()?;
+        #[cfg(target_os = "linux")]
+        if let Some(n) = direct::append(&self.partial, w.get_mut(), from)? {
+            return Ok(n);
+        }
         w.get_mut().copy_rest(from)
     }
 
@@ -656,36 +663,63 @@ mod tests {
         std::fs::remove_dir_all(&dir).ok();
     }
 
-    /// Another file's rest appended after buffered bytes, by the kernel
-    /// from a regular file and through the process from a pipe (which the
-    /// kernel's copy refuses), leaves exactly those bytes, in order, and
-    /// later writes go after them.
+    /// Other files' rests appended after buffered bytes — past the page
+    /// cache (from an unaligned end, over several chunks; from a pipe;
+    /// ending on a block boundary and starting on one) and by the kernel's
+    /// copy — leave exactly those bytes, in order, and later writes go
+    /// after them.
     #[test]
     #[cfg(unix)]
     fn appended_files_follow_the_bytes_written() {
         let dir = std::env::temp_dir().join(format!("lidarsim-append-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let source = dir.join("source.bin");
-        let len = 2 * COPY_BYTES + 4321;
-        let bytes: Vec<u8> = (0..len).map(|i| (i * 13 + i / 509) as u8).collect();
-        std::fs::write(&source, &bytes).unwrap();
+        let pattern = |len: usize, k: usize| -> Vec<u8> {
+            (0..len).map(|i| (i * k + i / 509) as u8).collect()
+        };
+        let source = |name: &str, bytes: &[u8]| {
+            let path = dir.join(name);
+            std::fs::write(&path, bytes).unwrap();
+            File::open(path).unwrap()
+        };
         let target = dir.join("joined.bin");
         let mut f = AtomicFile::create(&target).unwrap();
         f.writer().write_all(b"head").unwrap();
-        let mut from = File::open(&source).unwrap();
+        let mut want = b"head".to_vec();
+        let big = pattern(2 * COPY_BYTES + 4321, 13);
+        let mut from = source("big.bin", &big);
         from.seek(SeekFrom::Start(100)).unwrap();
-        assert_eq!(f.append_rest_of(&mut from).unwrap(), (len - 100) as u64);
+        assert_eq!(
+            f.append_rest_of(&mut from).unwrap(),
+            (big.len() - 100) as u64
+        );
+        want.extend_from_slice(&big[100..]);
         let (reader, mut writer) = std::io::pipe().unwrap();
         let feeding = std::thread::spawn(move || writer.write_all(b"from a pipe").unwrap());
         let mut pipe = File::from(std::os::fd::OwnedFd::from(reader));
         assert_eq!(f.append_rest_of(&mut pipe).unwrap(), 11);
         feeding.join().unwrap();
-        f.writer().write_all(b"tail").unwrap();
-        f.commit().unwrap();
-        let mut want = b"head".to_vec();
-        want.extend_from_slice(&bytes[100..]);
         want.extend_from_slice(b"from a pipe");
+        // The kernel's copy, as where the page cache cannot be bypassed.
+        let small = pattern(70_000, 7);
+        f.writer().flush().unwrap();
+        let copied = f
+            .writer()
+            .get_mut()
+            .copy_rest(&mut source("small.bin", &small));
+        assert_eq!(copied.unwrap(), small.len() as u64);
+        want.extend_from_slice(&small);
+        // To a block boundary, then from one.
+        let to_boundary = pattern(4096 - want.len() % 4096 + 8192, 3);
+        f.append_rest_of(&mut source("edge.bin", &to_boundary))
+            .unwrap();
+        want.extend_from_slice(&to_boundary);
+        assert_eq!(want.len() % 4096, 0);
+        let after = pattern(5000, 5);
+        f.append_rest_of(&mut source("after.bin", &after)).unwrap();
+        want.extend_from_slice(&after);
+        f.writer().write_all(b"tail").unwrap();
         want.extend_from_slice(b"tail");
+        f.commit().unwrap();
         assert!(std::fs::read(&target).unwrap() == want);
         std::fs::remove_dir_all(&dir).ok();
     }
