@@ -11,7 +11,10 @@ printed: on a shared host whose speed drifts, runs side by side in time
 compare fairer than one run of each. Every run starts with the runs
 before it written out and removed (os.sync), so that none pays for
 another's disk writes; each round prints when the split's last two parts
-ended and how long the merge took after them.
+ended, how long the merge took after them, and the CPU time of the
+2-thread run, the split's client and its workers (getrusage, the workers'
+through client.run), so that the split's extra CPU time is seen apart
+from the host's speed.
 
     target/pyenv/bin/python scripts/bench_distributed.py [--lines 4] [--pulses-per-line 10000000] [--rounds 1] [--parts N]
 
@@ -22,8 +25,9 @@ installs both into target/pyenv) and target/release/lidarsim.
 import argparse
 import hashlib
 import os
-import statistics
 import re
+import resource
+import statistics
 import shutil
 import subprocess
 import tempfile
@@ -41,6 +45,12 @@ def timed(f):
     t = time.perf_counter()
     out = f()
     return time.perf_counter() - t, out
+
+
+def cpu_seconds():
+    """CPU time of this process so far (all its threads), s."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
 
 
 def main():
@@ -127,23 +137,32 @@ def one_round(work, survey, parts):
     one, _ = timed(lambda: lidarsim.Survey.load(work / "lines.toml").run_to(
         work / "one", threads=1, progress=False))
     digest = digest_and_remove(work / "one")
+    cpu_two = cpu_seconds()
     two, _ = timed(lambda: lidarsim.Survey.load(work / "lines.toml").run_to(
         work / "two", threads=2, progress=False))
+    cpu_two = cpu_seconds() - cpu_two
     digest_and_remove(work / "two")
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                            dashboard_address=None)
     client = Client(cluster)
     client.run(lambda: __import__("lidarsim"))
+    workers_before = client.run(cpu_seconds)
+    cpu_client = cpu_seconds()
     started = time.perf_counter()
     parts_done = []
     split, _ = timed(lambda: lidarsim.distributed.run(
         survey, client, work / "split", parts=parts, threads_per_part=1,
         progress=lambda *_: parts_done.append(time.perf_counter() - started)))
+    cpu_client = cpu_seconds() - cpu_client
+    workers = client.run(cpu_seconds)
+    cpu_workers = sum(workers[w] - workers_before.get(w, 0.0) for w in workers)
     client.close()
     cluster.close()
     print(f"  split: {len(parts_done)} parts, the last two done at "
           + ", ".join(f"{t:.2f}" for t in parts_done[-2:])
           + f" s, merged {split - parts_done[-1]:.2f} s later", flush=True)
+    print(f"  CPU time: 2 threads {cpu_two:.2f} s; split {cpu_client + cpu_workers:.2f} s "
+          f"(client {cpu_client:.2f}, workers {cpu_workers:.2f})", flush=True)
     same = digest_and_remove(work / "split") == digest
     return one, two, split, same
 
