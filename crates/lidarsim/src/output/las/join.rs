@@ -101,7 +101,8 @@ impl LasJoin {
         let (mut f, records) = signature(part)?;
         let start = if joined.parts.is_empty() { 0 } else { records };
         f.seek(SeekFrom::Start(start)).map_err(named)?;
-        // The kernel's copy does not say which side failed: both are named.
+        // An append reads one file and writes the other, and its error
+        // does not say which: both are named.
         let appended = joined.file.append_rest_of(&mut f).map_err(|e| {
             named(io::Error::new(
                 e.kind(),
