@@ -377,12 +377,18 @@ fn a_merge_that_follows_its_parts_is_the_unsplit_run() {
 
 /// A merge following its parts gives up after the time given without a
 /// part finishing, naming the parts it waited for, and refuses a part of
-/// another run as soon as it finishes; neither leaves merged files.
+/// another run as soon as it finishes; neither leaves merged files, and
+/// taken parts are left whole (the first one's LAS file copied, not
+/// moved), to be merged again.
 #[test]
 fn a_merge_that_follows_its_parts_gives_up_or_refuses_with_the_reason() {
     let dir = temp("parts-follow-bad");
     let survey = dir.join("survey.toml");
-    std::fs::write(&survey, SURVEY).unwrap();
+    let las_only = SURVEY.replace(
+        r#"formats = ["las-waveform", "laz", "ply", "xyz"]"#,
+        r#"formats = ["las"]"#,
+    );
+    std::fs::write(&survey, &las_only).unwrap();
     let done = run_parts(&dir, &survey, 2, &[1]);
     let never = dir.join("p2-2");
     let merged = dir.join("merged");
@@ -392,10 +398,16 @@ fn a_merge_that_follows_its_parts_gives_up_or_refuses_with_the_reason() {
         let e = String::from_utf8_lossy(&o.stderr).into_owned();
         assert!(!e.contains("panicked"), "{e}");
         assert!(!merged.join("points.las").exists() && !merged.join("summary.json").exists());
+        assert!(!merged.join("points.las.partial").exists());
+        assert!(done[0].join("points.las").exists());
         e
     };
     let parts = [done[0].clone(), never.clone()];
-    let e = failed(follower(&merged, &parts, &["--give-up-after", "0.3"]));
+    let e = failed(follower(
+        &merged,
+        &parts,
+        &["--take-parts", "--give-up-after", "0.3"],
+    ));
     assert!(
         e.contains("gave up after 0.3 s") && e.contains(s(&never)) && !e.contains(s(&done[0])),
         "{e}"
@@ -403,7 +415,7 @@ fn a_merge_that_follows_its_parts_gives_up_or_refuses_with_the_reason() {
     // Part 2 of another seed: refused once it finished, without waiting
     // for the time to give up.
     let other = dir.join("other.toml");
-    std::fs::write(&other, SURVEY.replace("seed = 17", "seed = 18")).unwrap();
+    std::fs::write(&other, las_only.replace("seed = 17", "seed = 18")).unwrap();
     let foreign = dir.join("foreign");
     ok(&lidarsim(&[
         "run",
@@ -417,7 +429,7 @@ fn a_merge_that_follows_its_parts_gives_up_or_refuses_with_the_reason() {
     let e = failed(follower(
         &merged,
         &parts,
-        &["--overwrite", "--give-up-after", "600"],
+        &["--overwrite", "--take-parts", "--give-up-after", "600"],
     ));
     assert!(
         e.contains(&format!("{}: part 2/2 is not of the run", s(&parts[1]))),

@@ -43,7 +43,9 @@ impl Default for Follow {
 /// refused at once. `parts_added(added, given)` is called after each part
 /// is added. The output is claimed before the first look; a merge that
 /// gives up (`follow.give_up_after`) or is stopped (`options.stop`)
-/// names the parts it was waiting for and leaves no merged file.
+/// names the parts it was waiting for and leaves no merged file, and
+/// every part as it was: taken parts are removed once the merge is
+/// complete, but the first part's LAS file is copied, not moved.
 pub fn merge_following(
     part_dirs: &[PathBuf],
     out_dir: &Path,
@@ -53,6 +55,9 @@ pub fn merge_following(
     parts_added: &dyn Fn(usize, usize),
 ) -> Result<Summary, RunError> {
     let mut merge = Merge::begin(out_dir, options.overwrite, taken)?;
+    // A following merge is the one most likely to end early (a part that
+    // failed): it leaves the parts whole, to be merged again.
+    merge.copy_first_part();
     let mut waiting: Vec<&PathBuf> = part_dirs.iter().collect();
     let mut news = Instant::now();
     let mut added = 0;

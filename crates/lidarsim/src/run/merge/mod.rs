@@ -122,6 +122,9 @@ pub fn merge_over(
 pub struct Merge {
     out_dir: PathBuf,
     taken: Parts,
+    /// Whether the first stitched part's LAS file is moved into the output
+    /// (taken parts, unless [`Merge::copy_first_part`]).
+    move_first: bool,
     claimed: outdir::Claimed,
     gathered: Gathered,
     join: LasJoin,
@@ -138,11 +141,20 @@ impl Merge {
         Ok(Self {
             out_dir: out_dir.to_path_buf(),
             taken,
+            move_first: taken == Parts::Take,
             claimed: outdir::claim(out_dir, overwrite)?,
             gathered: Gathered::default(),
             join: LasJoin::new(&out_dir.join(PART_LAS)),
             failed: false,
         })
+    }
+
+    /// Copies the first stitched part's LAS file even when the parts are
+    /// taken, so that a merge that fails before it finishes leaves every
+    /// part as it was (taken parts are still removed once it is
+    /// complete). Call before the first part is added.
+    pub fn copy_first_part(&mut self) {
+        self.move_first = false;
     }
 
     /// Adds the part in `dir`, refused as [`merge`] refuses it, and joins
@@ -167,7 +179,7 @@ impl Merge {
             outdir::check_inputs(&self.out_dir, &crate::files::input_files(&first.survey))?;
         }
         if first.with_report {
-            let take = self.taken == Parts::Take;
+            let take = self.move_first;
             while let Some((dir, r)) = self.gathered.part(self.join.parts() + 1) {
                 self.join
                     .append(&dir.join(&r.points_file), take)
@@ -200,6 +212,7 @@ impl Merge {
         let Merge {
             out_dir,
             taken,
+            move_first,
             claimed,
             gathered,
             mut join,
@@ -245,7 +258,7 @@ impl Merge {
         };
         let (world, joined) = if with_report {
             let joining = || {
-                let take = taken == Parts::Take;
+                let take = move_first;
                 let mut slots: u64 = inputs[..join.parts()]
                     .iter()
                     .map(|p| p.counts.pulse_slots)
