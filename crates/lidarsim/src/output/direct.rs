@@ -14,18 +14,15 @@
 //! program, if at all.
 
 use std::fs::File;
-use std::io::{self, Read, Seek, SeekFrom, Write};
+use std::io::{self, Seek, SeekFrom, Write};
 use std::os::unix::fs::{FileExt, OpenOptionsExt};
 use std::path::Path;
 
-use super::OutFile;
+use super::{COPY_BYTES, OutFile, read_full};
 
 /// Alignment of direct writes' offsets, lengths and memory: the largest
 /// logical block size of common devices.
 const ALIGN: usize = 4096;
-
-/// Bytes read and written at a time.
-const CHUNK: usize = 1 << 20;
 
 /// Appends what `from` holds after its position to `out`, the file at
 /// `path` (open for writing under `out` as well), written direct where it
@@ -41,9 +38,9 @@ pub(super) fn append(path: &Path, out: &mut OutFile, from: &mut File) -> io::Res
     else {
         return Ok(None);
     };
-    let mut memory = vec![0u8; CHUNK + ALIGN];
+    let mut memory = vec![0u8; COPY_BYTES + ALIGN];
     let at = memory.as_ptr().align_offset(ALIGN);
-    let buf = &mut memory[at..at + CHUNK];
+    let buf = &mut memory[at..at + COPY_BYTES];
     let mut appended = 0u64;
     // Up to the next block boundary, through the page cache.
     let head = (ALIGN - (out.pos % ALIGN as u64) as usize) % ALIGN;
@@ -78,22 +75,8 @@ pub(super) fn append(path: &Path, out: &mut OutFile, from: &mut File) -> io::Res
         // What follows the last whole block, at the end of the file.
         out.write_all(&buf[whole..n])?;
         appended += n as u64;
-        if n < CHUNK {
+        if n < COPY_BYTES {
             return Ok(Some(appended));
         }
     }
-}
-
-/// Fills `buf` from `from`, short only at its end; returns the bytes read.
-fn read_full(from: &mut File, buf: &mut [u8]) -> io::Result<usize> {
-    let mut filled = 0;
-    while filled < buf.len() {
-        match from.read(&mut buf[filled..]) {
-            Ok(0) => break,
-            Ok(n) => filled += n,
-            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(e),
-        }
-    }
-    Ok(filled)
 }

@@ -279,14 +279,12 @@ impl OutFile {
         }
         let mut buf = vec![0u8; COPY_BYTES];
         loop {
-            let n = match std::io::Read::read(from, &mut buf) {
-                Ok(0) => return Ok(copied),
-                Ok(n) => n,
-                Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
-                Err(e) => return Err(e),
-            };
+            let n = read_full(from, &mut buf)?;
             self.write_all(&buf[..n])?;
             copied += n as u64;
+            if n < buf.len() {
+                return Ok(copied);
+            }
         }
     }
 
@@ -319,8 +317,22 @@ impl OutFile {
     }
 }
 
-/// Bytes copied at a time by [`OutFile::copy_rest`].
+/// Bytes copied at a time by [`OutFile::copy_rest`] and `direct.rs`.
 const COPY_BYTES: usize = 1 << 20;
+
+/// Fills `buf` from `from`, short only at its end; returns the bytes read.
+fn read_full(from: &mut File, buf: &mut [u8]) -> io::Result<usize> {
+    let mut filled = 0;
+    while filled < buf.len() {
+        match std::io::Read::read(from, &mut buf[filled..]) {
+            Ok(0) => break,
+            Ok(n) => filled += n,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(filled)
+}
 
 /// Whether `e`, from `copy_file_range` before any byte was copied, says
 /// that these files cannot be copied by the kernel (other file systems on
