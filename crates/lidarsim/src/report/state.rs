@@ -7,9 +7,18 @@ use super::ReportSink;
 use super::sink::MAX_PROFILE_POINTS;
 use crate::render::RenderPoint;
 
-/// First bytes of a saved [`ReportSink`] state (format version 2: with the
-/// error statistics).
-const STATE_MAGIC: &[u8; 8] = b"LSREPRT2";
+/// First bytes of a saved [`ReportSink`] state (format version 3: the
+/// pixels in runs, those that hold no point left out).
+const STATE_MAGIC: &[u8; 8] = b"LSREPRT3";
+
+/// First bytes of a state in format version 2 (every pixel written), which
+/// [`ReportSink::restore`] still reads: an interrupted run saved by an
+/// earlier build resumes.
+const STATE_MAGIC_V2: &[u8; 8] = b"LSREPRT2";
+
+/// Bytes of one pixel's record: its top's height, intensity and class, and
+/// its point count.
+const PIXEL_BYTES: usize = 11;
 
 impl ReportSink {
     /// Writes everything the sink has gathered, so that an interrupted run
@@ -17,7 +26,9 @@ impl ReportSink {
     /// the grid, the per-pixel arrays, the histogram, the cross-section
     /// points, the two sample pulses and the error statistics).
     pub fn save(&self, w: &mut dyn io::Write) -> io::Result<()> {
-        let mut b = Vec::with_capacity(self.count.len() * 11 + self.profile.len() * 32 + 256);
+        let n = self.count.len();
+        let touched = (0..n).filter(|&k| !self.untouched(k)).count();
+        let mut b = Vec::with_capacity(touched * (PIXEL_BYTES + 8) + self.profile.len() * 32 + 256);
         b.extend_from_slice(STATE_MAGIC);
         for v in [self.width as u64, self.height as u64] {
             b.extend_from_slice(&v.to_le_bytes());
@@ -25,11 +36,23 @@ impl ReportSink {
         for v in [self.x0, self.y0, self.resolution_m, self.profile_y] {
             b.extend_from_slice(&v.to_le_bytes());
         }
-        for k in 0..self.count.len() {
-            b.extend_from_slice(&self.top_z[k].to_le_bytes());
-            b.extend_from_slice(&self.top_intensity[k].to_le_bytes());
-            b.push(self.top_class[k]);
-            b.extend_from_slice(&self.count[k].to_le_bytes());
+        // The pixels in row order as runs: the number of untouched pixels
+        // (as a new sink holds them), the number of touched ones that
+        // follow, and their records. A part of a survey covers a strip of
+        // the area; the rest of its grid is left out.
+        let mut k = 0;
+        while k < n {
+            let first = (k..n).find(|&j| !self.untouched(j)).unwrap_or(n);
+            let end = (first..n).find(|&j| self.untouched(j)).unwrap_or(n);
+            b.extend_from_slice(&run_len(first - k).to_le_bytes());
+            b.extend_from_slice(&run_len(end - first).to_le_bytes());
+            for j in first..end {
+                b.extend_from_slice(&self.top_z[j].to_le_bytes());
+                b.extend_from_slice(&self.top_intensity[j].to_le_bytes());
+                b.push(self.top_class[j]);
+                b.extend_from_slice(&self.count[j].to_le_bytes());
+            }
+            k = end;
         }
         for n in self.returns_per_pulse {
             b.extend_from_slice(&n.to_le_bytes());
@@ -73,9 +96,11 @@ impl ReportSink {
     /// a new sink over the same area (the grid is compared).
     pub fn restore(&mut self, bytes: &[u8]) -> io::Result<()> {
         let mut r = StateReader { bytes, at: 0 };
-        if r.take(8)? != STATE_MAGIC {
-            return Err(state_error("not a report state"));
-        }
+        let runs = match r.take(8)? {
+            m if m == STATE_MAGIC => true,
+            m if m == STATE_MAGIC_V2 => false,
+            _ => return Err(state_error("not a report state")),
+        };
         let (w, h) = (r.u64()?, r.u64()?);
         let grid = [r.f64()?, r.f64()?, r.f64()?, r.f64()?];
         if (w, h) != (self.width as u64, self.height as u64)
@@ -83,11 +108,30 @@ impl ReportSink {
         {
             return Err(state_error("it was made for another area"));
         }
-        for k in 0..self.count.len() {
-            self.top_z[k] = f32::from_bits(r.u32()?);
-            self.top_intensity[k] = r.u16()?;
-            self.top_class[k] = r.u8()?;
-            self.count[k] = r.u32()?;
+        let n = self.count.len();
+        let mut k = 0;
+        while k < n {
+            // Version 2 is one run of every pixel.
+            let (untouched, touched) = if runs {
+                (r.u32()? as usize, r.u32()? as usize)
+            } else {
+                (0, n)
+            };
+            let first = k + untouched;
+            let end = first
+                .checked_add(touched)
+                .filter(|&e| e <= n && (untouched, touched) != (0, 0))
+                .ok_or_else(|| state_error("its pixel runs do not cover the grid"))?;
+            for j in k..first {
+                self.clear_pixel(j);
+            }
+            for j in first..end {
+                self.top_z[j] = f32::from_bits(r.u32()?);
+                self.top_intensity[j] = r.u16()?;
+                self.top_class[j] = r.u8()?;
+                self.count[j] = r.u32()?;
+            }
+            k = end;
         }
         for n in &mut self.returns_per_pulse {
             *n = r.u64()?;
@@ -128,6 +172,30 @@ impl ReportSink {
         }
         Ok(())
     }
+}
+
+impl ReportSink {
+    /// Whether pixel `k` is as a new sink holds it (no point seen).
+    fn untouched(&self, k: usize) -> bool {
+        self.count[k] == 0
+            && self.top_z[k] == f32::NEG_INFINITY
+            && self.top_intensity[k] == 0
+            && self.top_class[k] == 0
+    }
+
+    /// Sets pixel `k` as a new sink holds it.
+    fn clear_pixel(&mut self, k: usize) {
+        self.top_z[k] = f32::NEG_INFINITY;
+        self.top_intensity[k] = 0;
+        self.top_class[k] = 0;
+        self.count[k] = 0;
+    }
+}
+
+/// A run's length as the state writes it. A grid's pixels are counted in
+/// `u32` (a report's grid is at most a few million pixels).
+fn run_len(n: usize) -> u32 {
+    u32::try_from(n).expect("a report grid has fewer than 2^32 pixels")
 }
 
 fn state_error(what: &str) -> io::Error {
@@ -216,5 +284,99 @@ mod tests {
         // A state cut short is refused.
         let mut other = ReportSink::new(area(50.0, 50.0), 4.0);
         assert!(other.restore(&state[..state.len() - 1]).is_err());
+    }
+
+    /// The state of `sink`.
+    fn state(sink: &ReportSink) -> Vec<u8> {
+        let mut b = Vec::new();
+        sink.save(&mut b).unwrap();
+        b
+    }
+
+    #[test]
+    fn a_state_leaves_out_the_pixels_that_hold_no_point() {
+        // Two points, in two pixels apart from each other and from the
+        // grid's first and last pixels, outside the cross-section band
+        // (y = 25 ± 1 m).
+        let new = ReportSink::new(area(50.0, 50.0), 4.0);
+        let n = new.count.len();
+        assert!(n > 2_000, "{n} pixels");
+        let mut two = ReportSink::new(area(50.0, 50.0), 4.0);
+        two.write(&[
+            rec((10.0, 10.0, 1.0), DVec3::ZERO, (1, 1), (0, 0)),
+            rec((40.0, 40.0, 1.0), DVec3::ZERO, (1, 1), (0, 1)),
+        ])
+        .unwrap();
+        assert!(two.profile.is_empty());
+        // A new sink: one run of all pixels, none written. Each touched
+        // pixel that is not at an end adds a run (two u32) and its record
+        // (f32 height, u16 intensity, u8 class, u32 count); the grid's own
+        // fields are the same size.
+        let empty = state(&new);
+        assert_eq!(state(&two).len(), empty.len() + 2 * (8 + 11));
+        assert!(empty.len() < 1_000, "{} bytes", empty.len());
+        let mut back = ReportSink::new(area(50.0, 50.0), 4.0);
+        back.restore(&state(&two)).unwrap();
+        assert!(back == two);
+        // A state whose runs overrun the grid is refused.
+        let mut bad = empty.clone();
+        let runs = 8 + 16 + 32;
+        bad[runs..runs + 4].copy_from_slice(&(n as u32 + 1).to_le_bytes());
+        let err = ReportSink::new(area(50.0, 50.0), 4.0)
+            .restore(&bad)
+            .unwrap_err();
+        assert!(err.to_string().contains("runs"), "{err}");
+    }
+
+    #[test]
+    fn a_state_in_the_earlier_layout_of_every_pixel_is_restored() {
+        // Version 2: the magic `LSREPRT2`, then the grid's fields, then
+        // every pixel's record in row order, then the rest as in version
+        // 3. Written here from the sink's fields.
+        let mut sink = ReportSink::new(area(50.0, 50.0), 4.0);
+        let pts: Vec<PointRecord> = (0..300u64)
+            .map(|k| {
+                let f = k as f64;
+                rec(
+                    ((f * 0.37) % 50.0, (f * 0.61) % 50.0, f % 7.0),
+                    DVec3::new(0.01, 0.0, 0.0),
+                    (1, 1),
+                    (0, k),
+                )
+            })
+            .collect();
+        sink.write(&pts).unwrap();
+        let v3 = state(&sink);
+        let header = 8 + 16 + 32;
+        let mut v2 = b"LSREPRT2".to_vec();
+        v2.extend_from_slice(&v3[8..header]);
+        for k in 0..sink.count.len() {
+            v2.extend_from_slice(&sink.top_z[k].to_le_bytes());
+            v2.extend_from_slice(&sink.top_intensity[k].to_le_bytes());
+            v2.push(sink.top_class[k]);
+            v2.extend_from_slice(&sink.count[k].to_le_bytes());
+        }
+        // The rest (the returns-per-pulse histogram, the cross-section
+        // points, the sample pulses, the error statistics) is the end of
+        // the version-3 state after its pixel runs.
+        let rest = header + runs_len(&v3, sink.count.len());
+        v2.extend_from_slice(&v3[rest..]);
+        let mut back = ReportSink::new(area(50.0, 50.0), 4.0);
+        back.restore(&v2).unwrap();
+        assert!(back == sink);
+        assert!(v2.len() > v3.len());
+    }
+
+    /// The length of a version-3 state's pixel runs, from the first to the
+    /// end of the last.
+    fn runs_len(v3: &[u8], n: usize) -> usize {
+        let u32_at = |at: usize| u32::from_le_bytes(v3[at..at + 4].try_into().unwrap()) as usize;
+        let (mut at, mut k) = (8 + 16 + 32, 0);
+        while k < n {
+            let (untouched, touched) = (u32_at(at), u32_at(at + 4));
+            at += 8 + 11 * touched;
+            k += untouched + touched;
+        }
+        at - (8 + 16 + 32)
     }
 }
