@@ -99,14 +99,33 @@ def test_a_run_on_a_local_cluster_is_the_unsplit_run(client, tmp_path, shared):
     s = survey()
     s.run_to(tmp_path / "whole", threads=2, progress=False)
     seen = []
+
+    def profiling():
+        """Whether each worker's statistical profiler runs."""
+        return set(client.run(
+            lambda dask_worker: dask_worker.periodic_callbacks["profile"].is_running()
+        ).values())
+
+    assert profiling() == {True}
     summary = lidarsim.distributed.run(
         s, client, tmp_path / "merged", parts=4, shared=shared,
-        progress=lambda done, total, rate: seen.append((done, total, rate)),
+        progress=lambda done, total, rate: seen.append((done, total, rate, profiling())),
     )
     assert summary["points"] > 50_000
     assert_same_run(tmp_path / "whole", tmp_path / "merged")
-    assert [d for d, _, _ in seen] == [1, 2, 3, 4] and all(t == 4 for _, t, _ in seen)
-    assert all(rate > 0 for _, _, rate in seen)
+    assert [d for d, _, _, _ in seen] == [1, 2, 3, 4] and all(t == 4 for _, t, _, _ in seen)
+    assert all(rate > 0 for _, _, rate, _ in seen)
+    # The workers' profiler was paused while the run held them, and runs
+    # again after it; asked to, the run leaves it running.
+    assert all(p == {False} for _, _, _, p in seen)
+    assert profiling() == {True}
+    if shared:
+        during = []
+        lidarsim.distributed.run(
+            s, client, tmp_path / "profiled", parts=2, profile_workers=True,
+            progress=lambda *_: during.append(profiling()),
+        )
+        assert during == [{True}, {True}]
     # The parts' directory is gone after the merge.
     assert not (tmp_path / "merged.parts").exists()
 

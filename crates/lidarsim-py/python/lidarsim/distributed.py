@@ -19,7 +19,8 @@ sees (``shared=True``, the usual HPC setup) or, with ``shared=False``, into
 a worker's temporary directory whose files travel back to the client. The
 client merges them into ``out`` as they arrive (a part's points are
 joined as soon as the parts before it are), over the survey's world,
-which it builds while the last parts run.
+which it builds while the last parts run. While the run holds the
+workers, their statistical profiler is paused (``profile_workers``).
 
 The survey travels to the workers as its TOML text (file paths absolute:
 meshes, rasters and point clouds must be readable there) with any scene
@@ -55,6 +56,14 @@ def _part_name(k: int, n: int) -> str:
 #: the client joins each part's points as it arrives), so a run is cut
 #: finer, into parts that workers take as they become free.
 PARTS_PER_SLOT = 16
+
+#: A Dask worker's periodic callbacks that a run pauses while it holds the
+#: workers, unless asked not to: the statistical profiler, which wakes
+#: every 10 ms (``distributed.worker.profile.interval``) to sample each
+#: worker thread's Python stack. A part runs in Rust with the interpreter
+#: released, where the samples see one frame; on a host with a core per
+#: worker, each wake-up takes the core from a part.
+_PROFILER = ("profile", "profile-cycle")
 
 #: The last survey a worker process built, by the TOML text it came from:
 #: a worker that runs several parts of one survey reads and indexes its
@@ -111,6 +120,7 @@ def run(
     retries: int = 2,
     overwrite: bool = False,
     progress: Any = True,
+    profile_workers: bool = False,
 ) -> Dict[str, Any]:
     """Runs ``survey`` split into ``parts`` parts (by default
     ``PARTS_PER_SLOT`` for each part the cluster runs at once, so that the
@@ -128,9 +138,11 @@ def run(
     failed with an error before giving up (a part whose worker died is run
     again by the scheduler in any case). ``progress``: True for a line of
     parts done and pulses per second, False for none, or a callable
-    ``f(parts_done, parts_total, pulses_per_second)``."""
-    from distributed import as_completed
-
+    ``f(parts_done, parts_total, pulses_per_second)``.
+    ``profile_workers``: leave Dask's statistical profiler running on the
+    workers during the run (by default it is paused until the run ends:
+    it samples a worker's Python stack every 10 ms, which shows nothing of
+    a part, and its wake-ups take time from the parts)."""
     out = Path(out)
     threads = sum(client.nthreads().values()) or 1
     if parts is None:
@@ -143,6 +155,32 @@ def run(
     # The merge claims the output at once (before any part runs), and joins
     # the parts' points as they arrive.
     merging = _lidarsim.PartMerge(os.fspath(out), overwrite, not keep_parts)
+    paused = {} if profile_workers else _pause_profilers(client)
+    try:
+        return _run(survey, client, out, parts, threads, threads_per_part, shared, where,
+                    keep_parts, retries, progress, merging)
+    finally:
+        _resume_profilers(client, paused)
+
+
+def _run(
+    survey: Survey,
+    client: Any,
+    out: Path,
+    parts: int,
+    threads: int,
+    threads_per_part: int,
+    shared: bool,
+    where: Path,
+    keep_parts: bool,
+    retries: int,
+    progress: Any,
+    merging: Any,
+) -> Dict[str, Any]:
+    """``run`` once the output is claimed: submits the parts, merges them
+    as they arrive and finishes the merge."""
+    from distributed import as_completed
+
     spec = (survey.to_toml(), survey._data)
     token = f"{os.getpid()}-{time.monotonic_ns()}"
     futures = [
@@ -206,6 +244,50 @@ def run(
         except OSError:
             pass
     return summary
+
+
+def _stop_profiler(dask_worker: Any) -> Tuple[str, ...]:
+    """On a worker (through ``Client.run``, on its event loop): stops the
+    profiler's periodic callbacks that run, and names them."""
+    stopped = []
+    for name in _PROFILER:
+        callback = getattr(dask_worker, "periodic_callbacks", {}).get(name)
+        if callback is not None and callback.is_running():
+            callback.stop()
+            stopped.append(name)
+    return tuple(stopped)
+
+
+def _start_profiler(names: Tuple[str, ...], dask_worker: Any) -> None:
+    """On a worker: starts again the callbacks ``_stop_profiler`` stopped."""
+    for name in names:
+        callback = getattr(dask_worker, "periodic_callbacks", {}).get(name)
+        if callback is not None and not callback.is_running():
+            callback.start()
+
+
+def _pause_profilers(client: Any) -> Dict[str, Tuple[str, ...]]:
+    """Stops the statistical profiler of every worker of ``client``; the
+    callbacks stopped, by worker. A worker that cannot be reached keeps
+    its profiler (the run goes on)."""
+    try:
+        stopped = client.run(_stop_profiler, on_error="ignore")
+    except Exception:  # noqa: BLE001 - profiling is not the run's business
+        return {}
+    return {w: names for w, names in stopped.items() if isinstance(names, tuple) and names}
+
+
+def _resume_profilers(client: Any, paused: Dict[str, Tuple[str, ...]]) -> None:
+    """Starts again the profilers ``_pause_profilers`` stopped, on the
+    workers still there."""
+    by_names: Dict[Tuple[str, ...], list] = {}
+    for worker, names in paused.items():
+        by_names.setdefault(names, []).append(worker)
+    for names, workers in by_names.items():
+        try:
+            client.run(_start_profiler, names, workers=workers, on_error="ignore")
+        except Exception:  # noqa: BLE001 - a worker gone has no profiler to start
+            pass
 
 
 class _WorldBuilder:
