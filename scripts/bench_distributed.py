@@ -18,12 +18,13 @@ from the host's speed.
 
     target/pyenv/bin/python scripts/bench_distributed.py [--lines 4] [--pulses-per-line 10000000] [--rounds 1] [--parts N]
 
-With --profiler-pairs P it measures instead what Dask's statistical
-profiler costs a split: P pairs of splits on one 2-worker cluster, one
-with the workers' profiler paused (lidarsim.distributed.run's default)
-and one with it running (profile_workers=True), in turn, the order
-alternating from pair to pair; it prints each split's wall and CPU time
-and the medians of each kind.
+With --monitoring-pairs P it measures instead what Dask's monitoring of
+its servers (the workers' statistical profiler, every server's event-loop
+tick) costs a split: P pairs of splits on one 2-worker cluster, one with
+the monitoring paused (lidarsim.distributed.run's default) and one with
+it running (pause_monitoring=False), in turn, the order alternating from
+pair to pair; it prints each split's wall and CPU time (the client's and
+the workers') and the medians of each kind.
 
 Needs the lidarsim package and distributed (scripts/check_python.sh
 installs both into target/pyenv) and target/release/lidarsim.
@@ -68,8 +69,8 @@ def main():
     ap.add_argument("--keep", action="store_true", help="keep the working directory")
     ap.add_argument("--parts", type=int, default=None,
                     help="parts of the split (default: lidarsim.distributed.run's)")
-    ap.add_argument("--profiler-pairs", type=int, default=0,
-                    help="measure the workers' profiler instead: this many pairs of splits")
+    ap.add_argument("--monitoring-pairs", type=int, default=0,
+                    help="measure Dask's monitoring instead: this many pairs of splits")
     a = ap.parse_args()
     os.environ.setdefault("SOURCE_DATE_EPOCH", "1700000000")
     work = Path(tempfile.mkdtemp(prefix="lidarsim-bench-dist-"))
@@ -98,8 +99,8 @@ def main():
     pulses = a.lines * a.pulses_per_line
     print(f"terrain scene, {a.lines} lines, {pulses} pulses")
 
-    if a.profiler_pairs:
-        profiler_pairs(work, survey, a.parts, a.profiler_pairs)
+    if a.monitoring_pairs:
+        monitoring_pairs(work, survey, a.parts, a.monitoring_pairs)
         if not a.keep:
             shutil.rmtree(work, ignore_errors=True)
         return
@@ -126,10 +127,10 @@ def main():
         shutil.rmtree(work, ignore_errors=True)
 
 
-def profiler_pairs(work, survey, parts, pairs):
+def monitoring_pairs(work, survey, parts, pairs):
     """Splits on one cluster (its workers hold the scene after the first),
-    with the workers' profiler paused and running, in turn: wall and CPU
-    time of each, and the medians of each kind."""
+    with Dask's monitoring paused and running, in turn: wall and CPU time
+    of each, and the medians of each kind."""
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                            dashboard_address=None)
     client = Client(cluster)
@@ -137,27 +138,27 @@ def profiler_pairs(work, survey, parts, pairs):
     survey.build()
     seen = {False: [], True: []}
     for p in range(pairs):
-        for profiled in (True, False) if p % 2 == 0 else (False, True):
+        for monitored in (True, False) if p % 2 == 0 else (False, True):
             shutil.rmtree(work / "split", ignore_errors=True)
             os.sync()
             workers_before = client.run(cpu_seconds)
             cpu_client = cpu_seconds()
             wall, _ = timed(lambda: lidarsim.distributed.run(
                 survey, client, work / "split", parts=parts, threads_per_part=1,
-                progress=False, profile_workers=profiled))
+                progress=False, pause_monitoring=not monitored))
             workers = client.run(cpu_seconds)
             cpu = cpu_seconds() - cpu_client + sum(
                 workers[w] - workers_before.get(w, 0.0) for w in workers)
-            seen[profiled].append((wall, cpu))
-            print(f"  profiler {'running' if profiled else 'paused '}: {wall:.2f} s, "
+            seen[monitored].append((wall, cpu))
+            print(f"  monitoring {'running' if monitored else 'paused '}: {wall:.2f} s, "
                   f"CPU time {cpu:.2f} s", flush=True)
     client.close()
     cluster.close()
     shutil.rmtree(work / "split", ignore_errors=True)
-    for profiled in (False, True):
-        walls = [w for w, _ in seen[profiled]]
-        cpus = [c for _, c in seen[profiled]]
-        print(f"profiler {'running' if profiled else 'paused '}: median {statistics.median(walls):.2f} s "
+    for monitored in (False, True):
+        walls = [w for w, _ in seen[monitored]]
+        cpus = [c for _, c in seen[monitored]]
+        print(f"monitoring {'running' if monitored else 'paused '}: median {statistics.median(walls):.2f} s "
               f"({min(walls):.2f}-{max(walls):.2f}), CPU time {statistics.median(cpus):.2f} s")
 
 

@@ -94,36 +94,45 @@ def assert_same_run(a, b):
     assert summary(a) == summary(b)
 
 
+def monitoring(client):
+    """Whether Dask's monitoring callbacks run, as a set over each worker's
+    profiler and tick, each nanny's tick and the scheduler's tick: {True}
+    when all run, {False} when none."""
+    def running(names, dask_worker=None, dask_scheduler=None):
+        server = dask_worker if dask_worker is not None else dask_scheduler
+        return [server.periodic_callbacks[n].is_running() for n in names]
+
+    states = list(client.run(running, ["profile", "profile-cycle", "tick"]).values())
+    states += list(client.run(running, ["tick"], nanny=True).values())
+    states.append(client.run_on_scheduler(running, ["tick"]))
+    assert len(states) == 5
+    return {r for server in states for r in server}
+
+
 @pytest.mark.parametrize("shared", [True, False])
 def test_a_run_on_a_local_cluster_is_the_unsplit_run(client, tmp_path, shared):
     s = survey()
     s.run_to(tmp_path / "whole", threads=2, progress=False)
     seen = []
 
-    def profiling():
-        """Whether each worker's statistical profiler runs."""
-        return set(client.run(
-            lambda dask_worker: dask_worker.periodic_callbacks["profile"].is_running()
-        ).values())
-
-    assert profiling() == {True}
+    assert monitoring(client) == {True}
     summary = lidarsim.distributed.run(
         s, client, tmp_path / "merged", parts=4, shared=shared,
-        progress=lambda done, total, rate: seen.append((done, total, rate, profiling())),
+        progress=lambda done, total, rate: seen.append((done, total, rate, monitoring(client))),
     )
     assert summary["points"] > 50_000
     assert_same_run(tmp_path / "whole", tmp_path / "merged")
     assert [d for d, _, _, _ in seen] == [1, 2, 3, 4] and all(t == 4 for _, t, _, _ in seen)
     assert all(rate > 0 for _, _, rate, _ in seen)
-    # The workers' profiler was paused while the run held them, and runs
-    # again after it; asked to, the run leaves it running.
-    assert all(p == {False} for _, _, _, p in seen)
-    assert profiling() == {True}
+    # Dask's monitoring was paused while the run held the cluster, and
+    # runs again after it; asked to, the run leaves it running.
+    assert all(m == {False} for _, _, _, m in seen)
+    assert monitoring(client) == {True}
     if shared:
         during = []
         lidarsim.distributed.run(
-            s, client, tmp_path / "profiled", parts=2, profile_workers=True,
-            progress=lambda *_: during.append(profiling()),
+            s, client, tmp_path / "monitored", parts=2, pause_monitoring=False,
+            progress=lambda *_: during.append(monitoring(client)),
         )
         assert during == [{True}, {True}]
     # The parts' directory is gone after the merge.
@@ -164,6 +173,9 @@ def test_a_worker_killed_mid_part_still_gives_the_unsplit_run(client, tmp_path):
     assert killed and killed[0] is not None
     assert killed[0] not in client.run(os.getpid).values()
     assert_same_run(tmp_path / "whole", tmp_path / "merged")
+    # The killed worker's nanny, which started a new worker, monitors
+    # again too.
+    assert monitoring(client) == {True}
 
 
 def test_parts_from_python_merge_and_bad_merges_are_refused(tmp_path):

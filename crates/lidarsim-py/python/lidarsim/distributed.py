@@ -20,7 +20,8 @@ a worker's temporary directory whose files travel back to the client. The
 client merges them into ``out`` as they arrive (a part's points are
 joined as soon as the parts before it are), over the survey's world,
 which it builds while the last parts run. While the run holds the
-workers, their statistical profiler is paused (``profile_workers``).
+cluster, Dask's own monitoring of its servers is paused
+(``pause_monitoring``).
 
 The survey travels to the workers as its TOML text (file paths absolute:
 meshes, rasters and point clouds must be readable there) with any scene
@@ -37,7 +38,7 @@ import tempfile
 import threading
 import time
 from pathlib import Path
-from typing import Any, Dict, Optional, Tuple, Union
+from typing import Any, Dict, List, Optional, Tuple, Union
 
 from . import Survey, _lidarsim, _threads, merge
 
@@ -57,13 +58,17 @@ def _part_name(k: int, n: int) -> str:
 #: finer, into parts that workers take as they become free.
 PARTS_PER_SLOT = 16
 
-#: A Dask worker's periodic callbacks that a run pauses while it holds the
-#: workers, unless asked not to: the statistical profiler, which wakes
-#: every 10 ms (``distributed.worker.profile.interval``) to sample each
-#: worker thread's Python stack. A part runs in Rust with the interpreter
-#: released, where the samples see one frame; on a host with a core per
-#: worker, each wake-up takes the core from a part.
-_PROFILER = ("profile", "profile-cycle")
+#: Periodic callbacks of a Dask cluster's servers that a run pauses while
+#: it holds the cluster, unless asked not to (``pause_monitoring``): each
+#: worker's statistical profiler, which wakes every 10 ms
+#: (``distributed.worker.profile.interval``) to sample its threads' Python
+#: stacks, and the event-loop tick of the workers, their nannies and the
+#: scheduler, which wakes every 20 ms (``distributed.admin.tick.interval``)
+#: to measure how late the loop is. A part runs in Rust with the
+#: interpreter released, where the samples see one frame and no loop is
+#: held up; on a host with a core per worker, each wake-up takes the core
+#: from a part.
+_MONITORING = ("profile", "profile-cycle", "tick")
 
 #: The last survey a worker process built, by the TOML text it came from:
 #: a worker that runs several parts of one survey reads and indexes its
@@ -120,7 +125,7 @@ def run(
     retries: int = 2,
     overwrite: bool = False,
     progress: Any = True,
-    profile_workers: bool = False,
+    pause_monitoring: bool = True,
 ) -> Dict[str, Any]:
     """Runs ``survey`` split into ``parts`` parts (by default
     ``PARTS_PER_SLOT`` for each part the cluster runs at once, so that the
@@ -139,10 +144,11 @@ def run(
     again by the scheduler in any case). ``progress``: True for a line of
     parts done and pulses per second, False for none, or a callable
     ``f(parts_done, parts_total, pulses_per_second)``.
-    ``profile_workers``: leave Dask's statistical profiler running on the
-    workers during the run (by default it is paused until the run ends:
-    it samples a worker's Python stack every 10 ms, which shows nothing of
-    a part, and its wake-ups take time from the parts)."""
+    ``pause_monitoring``: pause Dask's monitoring of its servers until the
+    run ends (the workers' statistical profiler, which samples their
+    Python stacks every 10 ms and shows nothing of a part, and every
+    server's event-loop tick, every 20 ms); their wake-ups take time from
+    the parts. False leaves them running."""
     out = Path(out)
     threads = sum(client.nthreads().values()) or 1
     if parts is None:
@@ -155,12 +161,12 @@ def run(
     # The merge claims the output at once (before any part runs), and joins
     # the parts' points as they arrive.
     merging = _lidarsim.PartMerge(os.fspath(out), overwrite, not keep_parts)
-    paused = {} if profile_workers else _pause_profilers(client)
+    paused = _pause_monitoring(client) if pause_monitoring else []
     try:
         return _run(survey, client, out, parts, threads, threads_per_part, shared, where,
                     keep_parts, retries, progress, merging)
     finally:
-        _resume_profilers(client, paused)
+        _resume_monitoring(client, paused)
 
 
 def _run(
@@ -246,48 +252,78 @@ def _run(
     return summary
 
 
-def _stop_profiler(dask_worker: Any) -> Tuple[str, ...]:
-    """On a worker (through ``Client.run``, on its event loop): stops the
-    profiler's periodic callbacks that run, and names them."""
+def _stop_monitoring(dask_worker: Any = None, dask_scheduler: Any = None) -> Tuple[str, ...]:
+    """On a worker or nanny (``Client.run``) or the scheduler
+    (``Client.run_on_scheduler``), on its event loop: stops the callbacks
+    of ``_MONITORING`` that run, and names them."""
+    server = dask_worker if dask_worker is not None else dask_scheduler
     stopped = []
-    for name in _PROFILER:
-        callback = getattr(dask_worker, "periodic_callbacks", {}).get(name)
+    for name in _MONITORING:
+        callback = getattr(server, "periodic_callbacks", {}).get(name)
         if callback is not None and callback.is_running():
             callback.stop()
             stopped.append(name)
     return tuple(stopped)
 
 
-def _start_profiler(names: Tuple[str, ...], dask_worker: Any) -> None:
-    """On a worker: starts again the callbacks ``_stop_profiler`` stopped."""
+def _start_monitoring(
+    names: Tuple[str, ...], dask_worker: Any = None, dask_scheduler: Any = None
+) -> None:
+    """On a server: starts again the callbacks ``_stop_monitoring`` stopped."""
+    server = dask_worker if dask_worker is not None else dask_scheduler
     for name in names:
-        callback = getattr(dask_worker, "periodic_callbacks", {}).get(name)
+        callback = getattr(server, "periodic_callbacks", {}).get(name)
         if callback is not None and not callback.is_running():
             callback.start()
 
 
-def _pause_profilers(client: Any) -> Dict[str, Tuple[str, ...]]:
-    """Stops the statistical profiler of every worker of ``client``; the
-    callbacks stopped, by worker. A worker that cannot be reached keeps
-    its profiler (the run goes on)."""
-    try:
-        stopped = client.run(_stop_profiler, on_error="ignore")
-    except Exception:  # noqa: BLE001 - profiling is not the run's business
-        return {}
-    return {w: names for w, names in stopped.items() if isinstance(names, tuple) and names}
+#: Where callbacks were paused: ("worker" or "nanny", the worker's
+#: address, the callbacks) or ("scheduler", None, the callbacks).
+_Paused = List[Tuple[str, Optional[str], Tuple[str, ...]]]
 
 
-def _resume_profilers(client: Any, paused: Dict[str, Tuple[str, ...]]) -> None:
-    """Starts again the profilers ``_pause_profilers`` stopped, on the
-    workers still there."""
-    by_names: Dict[Tuple[str, ...], list] = {}
-    for worker, names in paused.items():
-        by_names.setdefault(names, []).append(worker)
-    for names, workers in by_names.items():
+def _pause_monitoring(client: Any) -> _Paused:
+    """Stops the ``_MONITORING`` callbacks of every worker, nanny and the
+    scheduler of ``client``; what was stopped, where. A server that cannot
+    be reached keeps its callbacks (the run goes on)."""
+    paused = []
+    for kind in ("worker", "nanny"):
         try:
-            client.run(_start_profiler, names, workers=workers, on_error="ignore")
-        except Exception:  # noqa: BLE001 - a worker gone has no profiler to start
+            stopped = client.run(_stop_monitoring, nanny=kind == "nanny", on_error="ignore")
+        except Exception:  # noqa: BLE001 - monitoring is not the run's business
+            continue
+        paused += [(kind, w, names) for w, names in stopped.items()
+                   if isinstance(names, tuple) and names]
+    try:
+        names = client.run_on_scheduler(_stop_monitoring)
+        if names:
+            paused.append(("scheduler", None, tuple(names)))
+    except Exception:  # noqa: BLE001
+        pass
+    return paused
+
+
+def _resume_monitoring(client: Any, paused: _Paused) -> None:
+    """Starts again the callbacks ``_pause_monitoring`` stopped, on the
+    servers still there. Nannies are reached by their worker's address:
+    a nanny whose worker was restarted during the run has a new one, so
+    every nanny starts again the callbacks stopped on any."""
+    nannies = tuple(sorted({n for kind, _, names in paused if kind == "nanny" for n in names}))
+    calls = [((names,), {"workers": [worker], "on_error": "ignore"})
+             for kind, worker, names in paused if kind == "worker"]
+    if nannies:
+        calls.append(((nannies,), {"nanny": True, "on_error": "ignore"}))
+    for args, kwargs in calls:
+        try:
+            client.run(_start_monitoring, *args, **kwargs)
+        except Exception:  # noqa: BLE001 - a server gone has nothing to start
             pass
+    for kind, _, names in paused:
+        if kind == "scheduler":
+            try:
+                client.run_on_scheduler(_start_monitoring, names)
+            except Exception:  # noqa: BLE001
+                pass
 
 
 class _WorldBuilder:
