@@ -23,8 +23,9 @@ const PIXEL_BYTES: usize = 11;
 impl ReportSink {
     /// Writes everything the sink has gathered, so that an interrupted run
     /// can continue it with [`ReportSink::restore`] (little-endian binary:
-    /// the grid, the per-pixel arrays, the histogram, the cross-section
-    /// points, the two sample pulses and the error statistics).
+    /// the grid, the pixels that hold points in runs, the histogram, the
+    /// cross-section points, the two sample pulses and the error
+    /// statistics).
     pub fn save(&self, w: &mut dyn io::Write) -> io::Result<()> {
         let n = self.count.len();
         let touched = (0..n).filter(|&k| !self.untouched(k)).count();
