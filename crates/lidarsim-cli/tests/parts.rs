@@ -100,6 +100,33 @@ const SAME: [&str; 9] = [
     "trajectory_observed.csv",
 ];
 
+/// The test survey with plain LAS as its only point output (whose parts
+/// write `points.las`, joined by a merge).
+fn las_only() -> String {
+    SURVEY.replace(
+        r#"formats = ["las-waveform", "laz", "ply", "xyz"]"#,
+        r#"formats = ["las"]"#,
+    )
+}
+
+/// Asserts that each of `files` is in `merged` exactly when it is in
+/// `whole`, with the same bytes; `what` names the case in messages.
+fn assert_same_files(whole: &Path, merged: &Path, files: &[&str], what: &str) {
+    for f in files {
+        let (a, b) = (whole.join(f), merged.join(f));
+        assert_eq!(a.exists(), b.exists(), "{what}: {f}");
+        if a.exists() {
+            let (a, b) = (std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+            assert!(
+                a == b,
+                "{what}: {f} differs ({} vs {} bytes)",
+                a.len(),
+                b.len()
+            );
+        }
+    }
+}
+
 /// `summary.json` without its timings.
 fn summary(dir: &Path) -> serde_json::Value {
     let mut v: serde_json::Value =
@@ -167,18 +194,8 @@ fn merged_parts_are_the_unsplit_run_byte_for_byte() {
         let mut args = vec!["merge", "-o", s(&merged)];
         args.extend(parts.iter().map(|p| s(p)));
         ok(&lidarsim(&args));
-        for f in SAME {
-            let (a, b) = (
-                std::fs::read(whole.join(f)).unwrap(),
-                std::fs::read(merged.join(f)).unwrap(),
-            );
-            assert!(
-                a == b,
-                "{n} parts: {f} differs ({} vs {} bytes)",
-                a.len(),
-                b.len()
-            );
-        }
+        assert!(SAME.iter().all(|f| whole.join(f).exists()));
+        assert_same_files(&whole, &merged, &SAME, &format!("{n} parts"));
         assert_eq!(summary(&whole), summary(&merged), "{n} parts: summary.json");
         assert!(merged.join("report.html").exists());
     }
@@ -204,10 +221,7 @@ fn images(report: &Path) -> Vec<String> {
 fn stitched_las_parts_are_the_unsplit_run_byte_for_byte() {
     let dir = temp("parts-stitched");
     let survey = dir.join("survey.toml");
-    let las_only = SURVEY.replace(
-        r#"formats = ["las-waveform", "laz", "ply", "xyz"]"#,
-        r#"formats = ["las"]"#,
-    );
+    let las_only = las_only();
     std::fs::write(&survey, &las_only).unwrap();
     let whole = dir.join("whole");
     ok(&lidarsim(&["run", s(&survey), "-o", s(&whole)]));
@@ -235,18 +249,8 @@ fn stitched_las_parts_are_the_unsplit_run_byte_for_byte() {
         for p in &parts {
             assert_eq!(p.exists(), !take, "{n} parts: {}", p.display());
         }
-        for f in [
-            "points.las",
-            "survey.toml",
-            "trajectory.csv",
-            "trajectory_true.csv",
-            "trajectory_observed.csv",
-        ] {
-            assert!(
-                std::fs::read(whole.join(f)).unwrap() == std::fs::read(merged.join(f)).unwrap(),
-                "{n} parts: {f} differs"
-            );
-        }
+        assert!(whole.join("points.las").exists());
+        assert_same_files(&whole, &merged, &SAME, &format!("{n} parts"));
         assert_eq!(summary(&whole), summary(&merged), "{n} parts: summary.json");
         let pictures = images(&whole.join("report.html"));
         assert!(pictures.len() >= 4, "{}", pictures.len());
@@ -333,10 +337,7 @@ fn follower(out: &Path, parts: &[PathBuf], extra: &[&str]) -> std::process::Chil
 #[test]
 fn a_merge_that_follows_its_parts_is_the_unsplit_run() {
     let dir = temp("parts-follow");
-    let las_only = SURVEY.replace(
-        r#"formats = ["las-waveform", "laz", "ply", "xyz"]"#,
-        r#"formats = ["las"]"#,
-    );
+    let las_only = las_only();
     for (name, text, take) in [("all", SURVEY.to_string(), false), ("las", las_only, true)] {
         let here = dir.join(name);
         std::fs::create_dir_all(&here).unwrap();
@@ -357,16 +358,7 @@ fn a_merge_that_follows_its_parts_is_the_unsplit_run() {
         ok(&o);
         let e = String::from_utf8_lossy(&o.stderr);
         assert!(e.contains("part 3 of 3 joined"), "{e}");
-        for f in SAME {
-            let (a, b) = (whole.join(f), merged.join(f));
-            assert_eq!(a.exists(), b.exists(), "{name}: {f}");
-            if a.exists() {
-                assert!(
-                    std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap(),
-                    "{name}: {f} differs"
-                );
-            }
-        }
+        assert_same_files(&whole, &merged, &SAME, name);
         assert_eq!(summary(&whole), summary(&merged), "{name}: summary.json");
         for d in &dirs {
             assert_eq!(d.exists(), !take, "{name}: {}", d.display());
@@ -384,10 +376,7 @@ fn a_merge_that_follows_its_parts_is_the_unsplit_run() {
 fn a_merge_that_follows_its_parts_gives_up_or_refuses_with_the_reason() {
     let dir = temp("parts-follow-bad");
     let survey = dir.join("survey.toml");
-    let las_only = SURVEY.replace(
-        r#"formats = ["las-waveform", "laz", "ply", "xyz"]"#,
-        r#"formats = ["las"]"#,
-    );
+    let las_only = las_only();
     std::fs::write(&survey, &las_only).unwrap();
     let done = run_parts(&dir, &survey, 2, &[1]);
     let never = dir.join("p2-2");
@@ -447,10 +436,8 @@ fn a_merge_that_cannot_build_its_world_keeps_the_earlier_run() {
     let mesh = dir.join("shed.obj");
     std::fs::write(&mesh, "v -5 -5 3\nv 5 -5 3\nv 5 5 3\nv -5 5 3\nf 1 2 3 4\n").unwrap();
     let survey = dir.join("survey.toml");
-    let text = SURVEY.replace(
-        r#"formats = ["las-waveform", "laz", "ply", "xyz"]"#,
-        r#"formats = ["las"]"#,
-    ) + "\n[[mesh]]\nfile = \"shed.obj\"\nmaterial = \"roof\"\nclass = \"roof\"\n";
+    let text =
+        las_only() + "\n[[mesh]]\nfile = \"shed.obj\"\nmaterial = \"roof\"\nclass = \"roof\"\n";
     std::fs::write(&survey, text).unwrap();
     let parts = run_parts(&dir, &survey, 2, &[2, 1]);
     let out = dir.join("merged");

@@ -83,9 +83,9 @@ pub fn merge_following(
         let stopped = options.stop.is_some_and(|s| s.load(Ordering::Relaxed));
         let gave_up = follow
             .give_up_after
-            .is_some_and(|limit| news.elapsed() >= limit);
-        if stopped || gave_up {
-            return Err(not_finished(out_dir, &waiting, gave_up.then_some(follow)));
+            .filter(|&limit| news.elapsed() >= limit);
+        if stopped || gave_up.is_some() {
+            return Err(not_finished(out_dir, &waiting, gave_up));
         }
         std::thread::sleep(follow.poll);
     }
@@ -93,23 +93,22 @@ pub fn merge_following(
 }
 
 /// The error of a merge that stopped waiting for the parts in `waiting`:
-/// given up after `follow.give_up_after`, or else stopped.
-fn not_finished(out_dir: &Path, waiting: &[&PathBuf], follow: Option<&Follow>) -> RunError {
+/// given up after the time `gave_up` names, or else stopped.
+fn not_finished(out_dir: &Path, waiting: &[&PathBuf], gave_up: Option<Duration>) -> RunError {
     let which: Vec<String> = waiting.iter().map(|d| d.display().to_string()).collect();
-    let why = match follow.and_then(|f| f.give_up_after) {
-        Some(limit) => format!(
-            "gave up after {:.1} s without a part finishing",
-            limit.as_secs_f64()
+    let (kind, why) = match gave_up {
+        Some(limit) => (
+            io::ErrorKind::TimedOut,
+            format!(
+                "gave up after {:.1} s without a part finishing",
+                limit.as_secs_f64()
+            ),
         ),
-        None => "stopped".to_string(),
+        None => (io::ErrorKind::Interrupted, "stopped".to_string()),
     };
     error(
         out_dir,
-        if follow.is_some() {
-            io::ErrorKind::TimedOut
-        } else {
-            io::ErrorKind::Interrupted
-        },
+        kind,
         format!(
             "merge {why}: {} of the parts did not finish: {}",
             which.len(),
