@@ -303,8 +303,19 @@ seed = 3
 /// `dir` as `NAME-ground.obj`, `NAME-buildings.obj` (not for the forest)
 /// and `NAME.toml`; returns the survey's path.
 pub fn export(scene: BenchScene, dir: &Path, pulses: u64) -> io::Result<std::path::PathBuf> {
+    use lidarsim::output::own::{Mark, check_replaceable};
     std::fs::create_dir_all(dir)?;
     let name = scene.name();
+    // Every file written begins "# lidarsim benchmark": the scenes of an
+    // earlier export are replaced, nothing else.
+    for file in [
+        format!("{name}-ground.obj"),
+        format!("{name}-buildings.obj"),
+        format!("{name}.toml"),
+    ] {
+        check_replaceable(&dir.join(&file), Mark::FirstLine("# lidarsim benchmark"))
+            .map_err(|e| io::Error::new(e.kind(), format!("{file}: {e}")))?;
+    }
     let ground = format!("{name}-ground.obj");
     write_ground_obj(scene, &dir.join(&ground))?;
     let text = if scene == BenchScene::Forest {

@@ -106,7 +106,7 @@ pub struct RunArgs {
     pub part: Option<(usize, usize)>,
 }
 
-/// Parses `K/N` with `1 ≤ K ≤ N`.
+/// Parses `K/N` with `1 ≤ K ≤ N ≤ MAX_PARTS`.
 fn part_parser(text: &str) -> Result<(usize, usize), String> {
     let (k, n) = text
         .split_once('/')
@@ -117,9 +117,7 @@ fn part_parser(text: &str) -> Result<(usize, usize), String> {
             .map_err(|_| format!("'{text}' is not K/N: '{s}' is not a whole number"))
     };
     let (k, n) = (number(k)?, number(n)?);
-    if n == 0 || k == 0 || k > n {
-        return Err(format!("'{text}': K must be from 1 to N, and N at least 1"));
-    }
+    lidarsim::run::part::check_part_number(k, n)?;
     Ok((k, n))
 }
 

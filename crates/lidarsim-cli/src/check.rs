@@ -6,6 +6,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 use lidarsim::Survey;
+use lidarsim::message::fixed;
 use lidarsim::plan::plan;
 use lidarsim::world::{World, load};
 
@@ -76,23 +77,34 @@ fn check(survey: &Survey, world: &World, output: &Path) {
         }
     }
     say!("pulses:               {}", p.pulses);
-    say!("flight time:          {:.1} s", p.flight_time_s);
-    say!("swath width:          {:.1} m", p.swath_width_m);
+    say!("flight time:          {} s", fixed(p.flight_time_s, 1));
+    say!("swath width:          {} m", fixed(p.swath_width_m, 1));
     say!(
-        "point density:        {:.2} points/m² per line",
-        p.point_density_per_m2
+        "point density:        {} points/m² per line",
+        fixed(p.point_density_per_m2, 2)
     );
     say!(
-        "footprint diameter:   {:.3} m at nadir",
-        p.footprint_diameter_m
+        "footprint diameter:   {} m at nadir",
+        fixed(p.footprint_diameter_m, 3)
     );
-    say!(
-        "expected points:      ~{} (one per pulse, more under crowns: {:.0} % of the area)",
-        b.points,
-        b.crown_cover * 100.0
-    );
+    if b.crown_cover > 0.0 {
+        say!(
+            "expected points:      ~{} (one per pulse, more under crowns: {} % of the area)",
+            b.points,
+            fixed(b.crown_cover * 100.0, 0)
+        );
+    } else {
+        say!("expected points:      ~{} (one per pulse)", b.points);
+    }
     for f in &b.files {
         say!("  {:<24}~{}", f.name, human_bytes(f.bytes));
+    }
+    match survey.output.layout {
+        lidarsim::survey::Layout::Single => {}
+        lidarsim::survey::Layout::Strips => say!("  strips: {} file(s) per format", b.layout_files),
+        lidarsim::survey::Layout::Tiles(_) => {
+            say!("  tiles: up to {} file(s) per format", b.layout_files)
+        }
     }
     say!(
         "expected output:      ~{}{}",
@@ -109,22 +121,27 @@ fn check(survey: &Survey, world: &World, output: &Path) {
         memory.map_or_else(String::new, |m| format!(" ({} available)", human_bytes(m)))
     );
     for l in &p.lines {
+        let scan_lines = if l.scan_line_spacing_m > 0.0 {
+            format!("scan lines every {} m", fixed(l.scan_line_spacing_m, 2))
+        } else {
+            "no scan lines (the pattern does not repeat across the track)".to_string()
+        };
         say!(
-            "  line {}: {} pulses, {:.1} s, {:.1} m above ground, swath {:.1} m, {:.2} pts/m², \
-             scan lines every {:.2} m, footprints every {:.2} m across",
+            "  line {}: {} pulses, {} s, {} m above ground, swath {} m, {} pts/m², \
+             {scan_lines}, footprints every {} m across",
             l.line,
             l.pulses,
-            l.duration_s,
-            l.height_above_ground_m,
-            l.swath_width_m,
-            l.point_density_per_m2,
-            l.scan_line_spacing_m,
-            l.across_track_spacing_m
+            fixed(l.duration_s, 1),
+            fixed(l.height_above_ground_m, 1),
+            fixed(l.swath_width_m, 1),
+            fixed(l.point_density_per_m2, 2),
+            fixed(l.across_track_spacing_m, 2)
         );
         if let Some(deg) = l.echo_limit_deg {
             say!(
-                "    the swath ends where the ground's echo is lost, {deg:.1}° off nadir \
-                 (within the scan's field of view)"
+                "    the swath ends where the ground's echo is lost, {}° off nadir \
+                 (within the scan's field of view)",
+                fixed(deg, 1)
             );
         }
     }

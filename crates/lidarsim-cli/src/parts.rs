@@ -88,10 +88,12 @@ pub fn merge(args: MergeArgs) -> ExitCode {
     };
     let bar = pulse_bar(0);
     let progress = |done: u64| bar.set_position(done);
+    let warn = |w: &str| bar.suspend(|| note!("warning: {w}"));
     let options = RunOptions {
         stop: follow.then_some(&STOP),
         overwrite,
         no_space_check,
+        on_warning: Some(&warn),
         ..RunOptions::new(threads, &progress)
     };
     let taken = if take_parts { Parts::Take } else { Parts::Keep };

@@ -31,11 +31,17 @@ pub fn demo(args: DemoArgs) -> ExitCode {
         raw.seed = seed;
     }
     if let Some(path) = export_survey {
+        use lidarsim::output::own::{Mark, check_replaceable};
+        const HEAD: &str = "# lidarsim demo survey";
         let text = match toml::to_string(&raw) {
-            Ok(t) => t,
+            Ok(t) => {
+                format!("{HEAD}: the built-in town and forest (lidarsim demo --export-survey)\n{t}")
+            }
             Err(e) => return fail(1, &format!("cannot serialise the demo survey: {e}")),
         };
-        if let Err(e) = lidarsim::output::write_atomic(&path, text.as_bytes()) {
+        let written = check_replaceable(&path, Mark::FirstLine(HEAD))
+            .and_then(|()| lidarsim::output::write_atomic(&path, text.as_bytes()));
+        if let Err(e) = written {
             return fail(1, &format!("{}: {e}", path.display()));
         }
         note!("wrote the demo survey to {}", path.display());

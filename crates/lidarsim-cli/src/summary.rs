@@ -23,4 +23,7 @@ pub fn print(s: &Summary, output: &Path) {
     for f in &s.files {
         say!("wrote {}", output.join(f).display());
     }
+    if let Some(w) = lidarsim::summary::no_point_warning(s.pulses, s.points) {
+        note!("warning: {w}");
+    }
 }

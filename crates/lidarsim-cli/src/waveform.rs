@@ -4,6 +4,8 @@
 use std::path::Path;
 use std::process::ExitCode;
 
+use lidarsim::message::{fixed, num};
+use lidarsim::run::replay::pulse_at_gps_time;
 use lidarsim::world::load;
 
 use crate::args::WaveformArgs;
@@ -75,6 +77,7 @@ fn nearest_point(dir: &Path, near: &str) -> Result<Nearest, (u8, String)> {
     let mut reader = lidarsim::io::cloud::open_las(&cloud)
         .map_err(|why| (1, format!("{}: {why}", cloud.display())))?;
     let mut best: Option<([f64; 3], f64, u16, Option<f64>)> = None;
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     loop {
         let batch = reader.read_points(1 << 16).map_err(bad)?;
         if batch.is_empty() {
@@ -82,16 +85,36 @@ fn nearest_point(dir: &Path, near: &str) -> Result<Nearest, (u8, String)> {
         }
         for p in batch.points() {
             let p = p.map_err(bad)?;
-            let (dx, dy) = (p.x - q[0], p.y - q[1]);
-            let dz = q.get(2).map_or(0.0, |z| p.z - z);
-            let d2 = dx * dx + dy * dy + dz * dz;
-            if d2.is_finite() && best.is_none_or(|b| d2 < b.1) {
-                best = Some(([p.x, p.y, p.z], d2, p.point_source_id, p.gps_time));
+            // Without overflow: a place 1e200 m away is far, not infinite.
+            let d = (p.x - q[0])
+                .hypot(p.y - q[1])
+                .hypot(q.get(2).map_or(0.0, |z| p.z - z));
+            if d.is_finite() && best.is_none_or(|b| d < b.1) {
+                best = Some(([p.x, p.y, p.z], d, p.point_source_id, p.gps_time));
             }
+            (lo[0], lo[1]) = (lo[0].min(p.x), lo[1].min(p.y));
+            (hi[0], hi[1]) = (hi[0].max(p.x), hi[1].max(p.y));
         }
     }
-    let (at, d2, source, gps) =
+    let (at, d, source, gps) =
         best.ok_or_else(|| (2, format!("--near: {} holds no point", cloud.display())))?;
+    // A place beyond the cloud (by more than this) is near no point of it.
+    const OUTSIDE_M: f64 = 10.0;
+    if (0..2).any(|a| q[a] < lo[a] - OUTSIDE_M || q[a] > hi[a] + OUTSIDE_M) {
+        return Err((
+            2,
+            format!(
+                "--near {near}: no point of {} is near that place: its points span x {} to {} \
+                 m, y {} to {} m (the nearest is {} m away)",
+                cloud.display(),
+                fixed(lo[0], 2),
+                fixed(hi[0], 2),
+                fixed(lo[1], 2),
+                fixed(hi[1], 2),
+                fixed(d, 1)
+            ),
+        ));
+    }
     let gps = gps.ok_or_else(|| {
         (
             2,
@@ -103,7 +126,7 @@ fn nearest_point(dir: &Path, near: &str) -> Result<Nearest, (u8, String)> {
     })?;
     Ok(Nearest {
         at,
-        distance_m: d2.sqrt(),
+        distance_m: d,
         source,
         gps_time_s: gps,
     })
@@ -121,7 +144,11 @@ fn waveform(
     let survey_path = dir.join("survey.toml");
     let (survey, world) = load(&survey_path, None).map_err(|e| (2, e.to_string()))?;
     let offset = survey.output.gps_start_time_s.unwrap_or(0.0);
-    let prf = survey.scanner.prf_hz;
+    let at_time = |line: Option<usize>, t: f64, what: &str| {
+        pulse_at_gps_time(&survey, &world.lines, line, t)
+            .map(|(l, k)| (&world.lines[l], k))
+            .map_err(|why| (2, format!("{what}: {why}")))
+    };
     // The line and pulse: given, or found from a point's GPS time (and,
     // for --near, its point source ID).
     let (line_ref, k) = match (near, gps_time) {
@@ -132,40 +159,36 @@ fn waveform(
                 source,
                 gps_time_s: gps,
             } = nearest_point(dir, near)?;
-            let l = world
-                .lines
-                .get(usize::from(source).wrapping_sub(1))
-                .ok_or_else(|| {
-                    (
-                        2,
-                        format!(
-                            "--near: the nearest point has point source ID {source}, but the \
-                             survey has flight lines 1 to {}",
-                            world.lines.len()
-                        ),
-                    )
-                })?;
-            let k = ((gps - offset - l.start_time_s) * prf).round().max(0.0) as u64;
-            say!(
-                "nearest point to {near}: ({x:.3}, {y:.3}, {z:.3}), {d:.3} m away, \
-                 line {source} (point source ID), GPS time {gps:.6} s: pulse {k}"
+            let l = usize::from(source).wrapping_sub(1);
+            if l >= world.lines.len() {
+                return Err((
+                    2,
+                    format!(
+                        "--near: the nearest point has point source ID {source}, but the \
+                         survey has flight lines 1 to {}",
+                        world.lines.len()
+                    ),
+                ));
+            }
+            let what = format!(
+                "--near: the nearest point ({}, {}, {})",
+                fixed(x, 3),
+                fixed(y, 3),
+                fixed(z, 3)
             );
-            (l, k)
+            let (line_ref, k) = at_time(Some(l), gps, &what)?;
+            say!(
+                "nearest point to {near}: ({}, {}, {}), {} m away, line {source} (point source \
+                 ID), GPS time {} s: pulse {k}",
+                fixed(x, 3),
+                fixed(y, 3),
+                fixed(z, 3),
+                fixed(d, 3),
+                fixed(gps, 6)
+            );
+            (line_ref, k)
         }
-        (None, Some(t)) => {
-            let t = t - offset;
-            let l = world
-                .lines
-                .iter()
-                .find(|l| t >= l.start_time_s - 0.5 / prf && t < l.start_time_s + l.duration_s())
-                .ok_or_else(|| {
-                    (
-                        2,
-                        format!("--gps-time {}: no flight line was flying then", t + offset),
-                    )
-                })?;
-            (l, ((t - l.start_time_s) * prf).round().max(0.0) as u64)
-        }
+        (None, Some(t)) => at_time(None, t, &format!("--gps-time {}", num(t)))?,
         (None, None) => {
             let l = world
                 .lines
@@ -205,9 +228,9 @@ fn waveform(
         .save_png(output)
         .map_err(|e| (1, format!("{}: {e}", output.display())))?;
     say!(
-        "line {} pulse {k} (GPS time {:.6} s): {} sub-ray returns, {} echo(es)",
+        "line {} pulse {k} (GPS time {} s): {} sub-ray returns, {} echo(es)",
         line_ref.index + 1,
-        offset + sim.pulse_time(line_ref, k),
+        fixed(offset + sim.pulse_time(line_ref, k), 6),
         scratch.returns().len(),
         scratch.echoes().len()
     );

@@ -9,60 +9,11 @@
 //! after 120 s, so that a regression fails instead of exhausting the
 //! machine or hanging CI.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output, Stdio};
-use std::time::{Duration, Instant};
+use std::path::Path;
 
-fn temp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("lidarsim-misuse-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod common;
 
-/// Address space allowed to every command, bytes.
-const ADDRESS_SPACE: u64 = 4 << 30;
-/// Time allowed to every command.
-const TIMEOUT: Duration = Duration::from_secs(120);
-
-/// Runs `lidarsim ARGS` under the address-space limit and the timeout.
-fn lidarsim(args: &[&std::ffi::OsStr]) -> Output {
-    let mut c = Command::new(env!("CARGO_BIN_EXE_lidarsim"));
-    c.args(args).stdout(Stdio::piped()).stderr(Stdio::piped());
-    #[cfg(target_os = "linux")]
-    {
-        use std::os::unix::process::CommandExt;
-        // SAFETY: only setrlimit, async-signal-safe, between fork and exec.
-        unsafe {
-            c.pre_exec(|| {
-                let lim = libc::rlimit {
-                    rlim_cur: ADDRESS_SPACE,
-                    rlim_max: ADDRESS_SPACE,
-                };
-                if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
-                    return Err(std::io::Error::last_os_error());
-                }
-                Ok(())
-            });
-        }
-    }
-    let mut child = c.spawn().unwrap();
-    let start = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            return child.wait_with_output().unwrap();
-        }
-        if start.elapsed() > TIMEOUT {
-            child.kill().ok();
-            let o = child.wait_with_output().unwrap();
-            panic!(
-                "lidarsim {args:?} still ran after {TIMEOUT:?}: {}",
-                String::from_utf8_lossy(&o.stderr)
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-}
+use common::{limited as lidarsim, temp};
 
 const BASE: &str = r#"seed = 3
 
@@ -226,8 +177,7 @@ fn work_multipliers_are_refused_with_their_bound() {
         &[],
         &[
             "`polygon[1].vertices_m`",
-            "has 200000 vertices",
-            "at most 4096",
+            "more than 100000 items, the most a survey array may hold",
         ],
     );
     // 10 million trees: 1000 ha at 10 000 stems/ha.

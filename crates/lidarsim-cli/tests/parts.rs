@@ -285,12 +285,16 @@ fn stitched_las_parts_are_the_unsplit_run_byte_for_byte() {
         "{e}"
     );
     // Another coordinate scale in its header (LAS 1.4 R15 Table 3: the x
-    // scale factor at byte 131).
+    // scale factor at byte 131), the length kept: the part's checksum
+    // tells.
     let mut edited = bytes.clone();
     edited[131..139].copy_from_slice(&0.01f64.to_le_bytes());
     std::fs::write(&las, &edited).unwrap();
     let e = merge();
-    assert!(e.contains("scale or offset differ"), "{e}");
+    assert!(
+        e.contains("p2-2/points.las") && e.contains("is not the file part 2/2 wrote"),
+        "{e}"
+    );
     std::fs::write(&las, &bytes).unwrap();
     let state = parts[0].join("report.state");
     let saved = std::fs::read(&state).unwrap();
@@ -299,7 +303,7 @@ fn stitched_las_parts_are_the_unsplit_run_byte_for_byte() {
     std::fs::write(&state, &garbled).unwrap();
     let e = merge();
     assert!(
-        e.contains("report.state") && e.contains("not a report state"),
+        e.contains("report.state") && e.contains("is not the file part 1/2 wrote"),
         "{e}"
     );
     std::fs::write(&state, &saved).unwrap();
@@ -582,8 +586,10 @@ fn merges_of_parts_that_are_not_one_run_are_refused() {
     let e = merge(&[p1, p2, &foreign]);
     assert!(e.contains("survey.toml differs"), "{e}");
     // Not a part; a point file cut short; a survey edited afterwards.
-    let e = merge(&[p1, p2, &dir]);
-    assert!(e.contains("not the directory of a part"), "{e}");
+    let stranger = dir.join("stranger");
+    std::fs::create_dir_all(&stranger).unwrap();
+    let e = merge(&[p1, p2, &stranger]);
+    assert!(e.contains("not the record of a part"), "{e}");
     let cut = p3.join("points.part");
     let bytes = std::fs::read(&cut).unwrap();
     std::fs::write(&cut, &bytes[..bytes.len() - 10]).unwrap();

@@ -51,7 +51,10 @@ fn run_into_the_surveys_own_directory_keeps_the_survey() {
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{stderr}");
         assert!(!stderr.contains("panicked"), "{stderr}");
-        assert!(stderr.contains("write over this input"), "{stderr}");
+        assert!(
+            stderr.contains("write over or remove this input"),
+            "{stderr}"
+        );
         assert_eq!(std::fs::read_to_string(&survey).unwrap(), *SURVEY);
         assert_eq!(names(&dir), ["survey.toml"]);
     }

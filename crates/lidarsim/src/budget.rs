@@ -63,6 +63,9 @@ pub struct Budget {
     pub points: u64,
     /// Share of the scene's area under crowns, 0–1.
     pub crown_cover: f64,
+    /// Point files per format: 1, or a file per flight line (strips) or
+    /// per tile the lines may reach, at most (tiles).
+    pub layout_files: u64,
     /// Every file the run writes.
     pub files: Vec<FileEstimate>,
     /// Their total, bytes.
@@ -202,6 +205,15 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
     };
     let las = crate::files::las_settings_for(survey, b, lines);
     let single = o.layout == crate::survey::Layout::Single;
+    // Strips and tiles: a file (its header and VLRs) per line or tile.
+    let layout_files = match o.layout {
+        crate::survey::Layout::Single => 1,
+        crate::survey::Layout::Strips => lines.len() as u64,
+        crate::survey::Layout::Tiles(tile_m) => {
+            crate::world::tiles_over(crate::world::reachable_area(survey, b, lines), tile_m) as u64
+        }
+    };
+    let headers = (layout_files - 1) * las.file_len(0);
     if f.las {
         let mut s = las.clone();
         if f.las_waveform {
@@ -212,7 +224,7 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
         }
         add(
             if single { "points.las" } else { "LAS files" },
-            s.file_len(points),
+            s.file_len(points) + headers,
         );
     }
     if f.las_waveform {
@@ -235,7 +247,7 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
         // LASzip keeps a third or less of the bytes of airborne points.
         add(
             if single { "points.laz" } else { "LAZ files" },
-            las.file_len(points) * 2 / 5,
+            las.file_len(points) * 2 / 5 + headers,
         );
     }
     if f.ply {
@@ -288,6 +300,7 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
         pulses,
         points,
         crown_cover: cover,
+        layout_files,
         files,
         total_bytes,
         memory_bytes,
@@ -411,6 +424,7 @@ mod tests {
             pulses: 10,
             points: 10,
             crown_cover: 0.0,
+            layout_files: 1,
             files: Vec::new(),
             total_bytes: 2_000_000_000,
             memory_bytes: 3_000_000_000,

@@ -12,6 +12,19 @@ pub fn num(v: f64) -> String {
     }
 }
 
+/// A number as figures show it: `decimals` places for ordinary
+/// magnitudes, exponent form with three significant digits beyond them
+/// (`1.00e300 m`, not 301 digits; `4.00e-9 s`, not `0.00 s`).
+pub fn fixed(v: f64, decimals: usize) -> String {
+    let a = v.abs();
+    let smallest = 0.5 * 10f64.powi(-(decimals as i32));
+    if v == 0.0 || !v.is_finite() || (smallest..1e9).contains(&a) {
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
 /// Levenshtein distance between two short strings.
 pub fn edit_distance(a: &str, b: &str) -> usize {
     let b: Vec<char> = b.chars().collect();
@@ -47,5 +60,11 @@ mod tests {
         assert_eq!(num(123456.5), "123456.5");
         assert_eq!(num(0.0), "0");
         assert_eq!(num(f64::NAN), "NaN");
+        assert_eq!(fixed(1e300, 1), "1.00e300");
+        assert_eq!(fixed(-2.5e12, 2), "-2.50e12");
+        assert_eq!(fixed(4e-9, 2), "4.00e-9");
+        assert_eq!(fixed(0.004, 2), "4.00e-3");
+        assert_eq!(fixed(123.456, 1), "123.5");
+        assert_eq!(fixed(0.0, 3), "0.000");
     }
 }

@@ -119,6 +119,7 @@ impl Summary {
             .map_or(0, |i| i + 1);
         let mut warnings = world.warnings_with(survey);
         warnings.extend_from_slice(scene_warnings);
+        warnings.extend(no_point_warning(counts.pulses, counts.points));
         Summary {
             lidarsim_version: env!("CARGO_PKG_VERSION"),
             complete: true,
@@ -160,6 +161,19 @@ impl Summary {
             estimate: m.estimate.clone(),
         }
     }
+}
+
+/// The warning of a run whose `pulses` recorded no point at all
+/// (`points` is 0), if so.
+pub fn no_point_warning(pulses: u64, points: u64) -> Option<String> {
+    (pulses > 0 && points == 0).then(|| {
+        format!(
+            "the run recorded no point: none of its {} pulses returned an echo above the \
+             receiver's threshold (look at the swath and the scene's extent in `lidarsim \
+             check`, and at its warnings)",
+            pulses
+        )
+    })
 }
 
 /// A pulse as users count flight lines: line 1 is the first (the LAS

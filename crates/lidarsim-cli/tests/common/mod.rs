@@ -4,8 +4,11 @@
 // Each test file uses some of these.
 #![allow(dead_code)]
 
+use std::collections::BTreeMap;
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// The `lidarsim` binary.
 pub fn bin() -> Command {
@@ -58,4 +61,91 @@ pub fn run_survey(dir: &Path, text: &str) -> (Output, PathBuf) {
         .output()
         .unwrap();
     (o, out)
+}
+
+/// Address space allowed to a command run by [`limited`], bytes.
+pub const ADDRESS_SPACE: u64 = 4 << 30;
+/// Time allowed to a command run by [`limited`].
+pub const TIMEOUT: Duration = Duration::from_secs(120);
+
+/// Runs `lidarsim ARGS` under [`ADDRESS_SPACE`] and [`TIMEOUT`], so that a
+/// regression that allocates without bound or never ends fails the test
+/// instead of exhausting the machine or hanging CI.
+pub fn limited(args: &[&OsStr]) -> Output {
+    let mut c = bin();
+    c.args(args).stdout(Stdio::piped()).stderr(Stdio::piped());
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::process::CommandExt;
+        // SAFETY: only setrlimit, async-signal-safe, between fork and exec.
+        unsafe {
+            c.pre_exec(|| {
+                let lim = libc::rlimit {
+                    rlim_cur: ADDRESS_SPACE,
+                    rlim_max: ADDRESS_SPACE,
+                };
+                if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
+                    return Err(std::io::Error::last_os_error());
+                }
+                Ok(())
+            });
+        }
+    }
+    let mut child = c.spawn().unwrap();
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            return child.wait_with_output().unwrap();
+        }
+        if start.elapsed() > TIMEOUT {
+            child.kill().ok();
+            let o = child.wait_with_output().unwrap();
+            let shown: Vec<String> = args
+                .iter()
+                .map(|a| a.to_string_lossy().into_owned())
+                .collect();
+            panic!(
+                "lidarsim {shown:?} still ran after {TIMEOUT:?}: {}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Every file under `dir` (links not followed) with its bytes: what a test
+/// compares before and after a command that must not touch them.
+pub fn snapshot(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let e = e.unwrap();
+            let t = e.file_type().unwrap();
+            if t.is_dir() {
+                todo.push(e.path());
+            } else if t.is_file() {
+                out.insert(e.path(), std::fs::read(e.path()).unwrap());
+            }
+        }
+    }
+    out
+}
+
+/// CRC-32 (IEEE 802.3, reflected, polynomial 0xEDB88320), bit by bit as
+/// the textbook defines it: the test's own check of the checksums parts
+/// record, independent of the crate the program uses.
+pub fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 == 1 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
 }

@@ -5,6 +5,8 @@
 use std::path::{Path, PathBuf};
 
 use crate::geometry::{Aabb, DVec3};
+use crate::message::num;
+use crate::output::{HEADER_SIZE_14, RawHeader};
 use crate::scene::cloud::{CloudPlacement, MAX_VOXELS, Voxel};
 use crate::scene::{Primitive, Scene, Shape, SurfaceClass};
 
@@ -56,42 +58,165 @@ pub fn describe_las_error(e: &las::Error) -> String {
     }
 }
 
-/// Opens a LAS or LAZ file for reading, after checking the header's point
-/// count against the file's size (a LAS point takes its record length; LAZ
-/// can pack a smooth cloud into less than a byte per point, so it is not
-/// checked and its reader stops at the end of the data): a header that
-/// promises more points than the file holds is refused before any large
-/// allocation. Errors say what is wrong, without the path.
+/// Opens a LAS or LAZ file for reading once its layout is checked
+/// ([`check_layout`]): a header that promises more than the file holds, a
+/// LAZ chunk table that points outside the file or counts more chunks
+/// than it could hold, a version other than 1.0–1.4 or an unusable scale
+/// is refused before the reader allocates anything by them. Errors say
+/// what is wrong, without the path.
 pub fn open_las(path: &Path) -> Result<las::Reader, String> {
-    let size = crate::io::input::check_input(path, crate::io::input::MAX_INPUT_BYTES)
-        .map_err(|e| e.to_string())?;
+    let raw = check_layout(path)?;
     let reader = las::Reader::from_path(path).map_err(|e| describe_las_error(&e))?;
+    // The reader sizes its reads by its own reading of the header (its
+    // point format's record length, the 64- or 32-bit count): check that
+    // reading too against the file.
     let header = reader.header();
-    let t = header.transforms();
-    for (axis, tr) in [("x", t.x), ("y", t.y), ("z", t.z)] {
-        if !(tr.scale.is_finite() && tr.scale != 0.0 && tr.offset.is_finite()) {
-            return Err(format!(
-                "the header's {axis} scale factor is {} and offset {}: coordinates are stored as \
-                 integers times a non-zero scale plus the offset (LAS 1.4 R15, Table 4)",
-                tr.scale, tr.offset
-            ));
-        }
-    }
     let count = header.number_of_points();
     let record = u64::from(header.point_format().len());
-    let compressed = header.point_format().is_compressed
-        || header.vlrs().iter().any(|v| v.user_id == "laszip encoded")
-        || path
-            .extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
+    let size = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
     match count.checked_mul(record) {
-        Some(bytes) if bytes <= size || compressed => Ok(reader),
+        Some(bytes) if bytes <= size || raw.compressed() || header.point_format().is_compressed => {
+            Ok(reader)
+        }
         _ => Err(format!(
             "the header counts {count} points of {record} bytes, more than the file's {size} \
              bytes hold: it is truncated or its header is wrong"
         )),
     }
+}
+
+/// The header of the LAS or LAZ file at `path`, once the layout it
+/// declares fits the file (see [`open_las`]).
+pub fn check_layout(path: &Path) -> Result<RawHeader, String> {
+    use std::io::Read;
+    let size = crate::io::input::check_input(path, crate::io::input::MAX_INPUT_BYTES)
+        .map_err(|e| e.to_string())?;
+    let mut file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut head = Vec::with_capacity(usize::from(HEADER_SIZE_14));
+    (&mut file)
+        .take(u64::from(HEADER_SIZE_14))
+        .read_to_end(&mut head)
+        .map_err(|e| e.to_string())?;
+    let header = RawHeader::parse(&head).map_err(|e| e.to_string())?;
+    for (axis, (scale, offset)) in ["x", "y", "z"]
+        .iter()
+        .zip(header.scale.iter().zip(header.offset))
+    {
+        if !(scale.is_finite() && *scale != 0.0 && offset.is_finite()) {
+            return Err(format!(
+                "the header's {axis} scale factor is {} and offset {}: coordinates are stored as \
+                 integers times a non-zero scale plus the offset (LAS 1.4 R15, Table 4)",
+                num(*scale),
+                num(offset)
+            ));
+        }
+    }
+    let start = u64::from(header.offset_to_points);
+    if start < u64::from(header.header_size) || start > size {
+        return Err(if start > size {
+            format!(
+                "the file ends early: its header puts the points at byte {start}, beyond its \
+                 {size} bytes (truncated, or the header is wrong)"
+            )
+        } else {
+            format!(
+                "its header puts the points at byte {start}, inside its own {} bytes: the \
+                 header is wrong",
+                header.header_size
+            )
+        });
+    }
+    let compressed = header.compressed()
+        || path
+            .extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| e.eq_ignore_ascii_case("laz"));
+    if compressed {
+        check_chunk_table(&mut file, &header, size)?;
+    } else {
+        check_records(&header, size)?;
+    }
+    Ok(header)
+}
+
+/// Refuses an uncompressed file whose header counts more records than
+/// follow it, or none where records follow.
+fn check_records(header: &RawHeader, size: u64) -> Result<(), String> {
+    let start = u64::from(header.offset_to_points);
+    // Records end where extended VLRs or waveform packets stored in the
+    // file begin, else at its end.
+    let end = [header.start_of_first_evlr, header.start_of_waveform_data]
+        .into_iter()
+        .filter(|&at| at > start && at <= size)
+        .min()
+        .unwrap_or(size);
+    let record = u64::from(header.record_len).max(1);
+    let count = header.points();
+    let held = (end - start) / record;
+    if count
+        .checked_mul(record)
+        .is_none_or(|bytes| bytes > end - start)
+    {
+        return Err(format!(
+            "the header counts {count} points of {record} bytes, more than the file's {size} \
+             bytes hold: it is truncated or its header is wrong"
+        ));
+    }
+    if count == 0 && held > 0 {
+        return Err(format!(
+            "the header counts no point, but {held} records of {record} bytes follow it: its \
+             header is wrong (a file being written, or not finished?)"
+        ));
+    }
+    Ok(())
+}
+
+/// Refuses a LAZ file whose chunk table (LASzip: its offset in the first
+/// 8 bytes of the point data; there, a version and the number of chunks)
+/// lies outside the file or counts more chunks than the compressed data
+/// could hold (each chunk takes at least one byte and one point).
+fn check_chunk_table(
+    file: &mut std::fs::File,
+    header: &RawHeader,
+    size: u64,
+) -> Result<(), String> {
+    use std::io::{Read, Seek, SeekFrom};
+    let start = u64::from(header.offset_to_points);
+    let mut read_u64_at = |at: u64| -> Result<[u8; 8], String> {
+        let mut b = [0u8; 8];
+        file.seek(SeekFrom::Start(at))
+            .and_then(|_| file.read_exact(&mut b))
+            .map_err(|_| "the file ends early: it is truncated or not a LAZ file".to_string())?;
+        Ok(b)
+    };
+    let mut table = i64::from_le_bytes(read_u64_at(start)?);
+    if table == -1 {
+        // Written by a streaming compressor: the offset is in the last 8
+        // bytes.
+        table = i64::from_le_bytes(read_u64_at(size.saturating_sub(8))?);
+    }
+    let data = start + 8;
+    let Some(table) = u64::try_from(table)
+        .ok()
+        .filter(|&t| t >= data && t + 8 <= size)
+    else {
+        return Err(format!(
+            "its LAZ chunk table is said to be at byte {table}, outside the compressed points \
+             (bytes {data} to {size}): it is truncated or damaged"
+        ));
+    };
+    let b = read_u64_at(table)?;
+    let chunks = u64::from(u32::from_le_bytes([b[4], b[5], b[6], b[7]]));
+    let most = (table - data).min(header.points().max(1));
+    if chunks > most {
+        return Err(format!(
+            "its LAZ chunk table counts {chunks} chunks, more than its {} bytes of compressed \
+             points for {} points could hold: it is damaged",
+            table - data,
+            header.points()
+        ));
+    }
+    Ok(())
 }
 
 /// Loads a LAS, LAZ or XYZ text file (`.xyz`, `.txt`: `x y z [class]` a
@@ -131,7 +256,12 @@ pub fn add_point_data(
     let path = Path::new(name);
     let mut cells = Voxels::new(path, placement);
     for (i, p) in positions.iter().enumerate() {
-        cells.add(*p, classes.get(i).copied().unwrap_or(1))?;
+        cells
+            .add(*p, classes.get(i).copied().unwrap_or(1))
+            .map_err(|why| CloudError::Read {
+                path: path.to_path_buf(),
+                reason: format!("point {}: {why}", i + 1),
+            })?;
     }
     cells.add_to(scene, name.to_string())
 }
@@ -144,7 +274,6 @@ struct Voxels<'a> {
     placement: &'a CloudPlacement,
     cells: Vec<([i64; 3], u8)>,
     read: u64,
-    not_finite: u64,
 }
 
 impl<'a> Voxels<'a> {
@@ -154,30 +283,35 @@ impl<'a> Voxels<'a> {
             placement,
             cells: Vec::new(),
             read: 0,
-            not_finite: 0,
         }
     }
 
-    /// One point at `p` (before the offset) of class `code`.
-    fn add(&mut self, p: DVec3, code: u8) -> Result<(), CloudError> {
+    /// One point at `p` (before the offset) of class `code`; an error says
+    /// why it cannot be placed (without the file, which callers name with
+    /// the line or point).
+    fn add(&mut self, p: DVec3, code: u8) -> Result<(), String> {
         self.read += 1;
         let v = self.placement.voxel_m;
         let q = p + self.placement.offset_m;
         if !q.is_finite() {
-            self.not_finite += 1;
-            return Ok(());
+            return Err(format!(
+                "the point at ({}, {}, {}) m (with offset_m) is not finite",
+                num(q.x),
+                num(q.y),
+                num(q.z)
+            ));
         }
         let cell = (q / v).floor();
         // Beyond 2^52 cells the indices would no longer be exact.
         if cell.abs().max_element() > 4.5e15 {
-            return Err(CloudError::Read {
-                path: self.path.to_path_buf(),
-                reason: format!(
-                    "the point at ({}, {}, {}) m is more than 2^52 voxels of {v} m from the \
-                     origin: use a larger voxel_m",
-                    q.x, q.y, q.z
-                ),
-            });
+            return Err(format!(
+                "the point at ({}, {}, {}) m is more than 2^52 voxels of {} m from the origin: \
+                 use a larger voxel_m, or an offset_m that brings the cloud near the origin",
+                num(q.x),
+                num(q.y),
+                num(q.z),
+                num(v)
+            ));
         }
         self.cells
             .push(([cell.x as i64, cell.y as i64, cell.z as i64], code));
@@ -188,16 +322,6 @@ impl<'a> Voxels<'a> {
     /// code of equals), as one new object `name`; (points, voxels).
     fn add_to(mut self, scene: &mut Scene, name: String) -> Result<(u64, usize), CloudError> {
         let path = self.path.to_path_buf();
-        if self.cells.is_empty() && self.not_finite > 0 {
-            return Err(CloudError::Read {
-                path,
-                reason: format!(
-                    "none of its {} points has finite coordinates (check the header's scale \
-                     and offset)",
-                    self.not_finite
-                ),
-            });
-        }
         if self.cells.is_empty() {
             return Err(CloudError::Empty { path });
         }
@@ -267,7 +391,13 @@ fn read_las(path: &Path, cells: &mut Voxels<'_>) -> Result<(), CloudError> {
         }
         for p in batch.points() {
             let p = p.map_err(bad)?;
-            cells.add(DVec3::new(p.x, p.y, p.z), u8::from(p.classification))?;
+            let n = cells.read + 1;
+            cells
+                .add(DVec3::new(p.x, p.y, p.z), u8::from(p.classification))
+                .map_err(|why| CloudError::Read {
+                    path: path.to_path_buf(),
+                    reason: format!("point {n}: {why}"),
+                })?;
         }
     }
 }
@@ -280,10 +410,8 @@ fn read_xyz(path: &Path, cells: &mut Voxels<'_>) -> Result<(), CloudError> {
         path: path.to_path_buf(),
         reason,
     };
-    let bytes = crate::io::input::read_input(path, crate::io::input::MAX_INPUT_BYTES)
+    let text = crate::io::input::read_text(path, crate::io::input::MAX_INPUT_BYTES)
         .map_err(|e| read_err(e.to_string()))?;
-    let text = std::str::from_utf8(&bytes)
-        .map_err(|e| read_err(format!("not a text file (UTF-8): {e}")))?;
     for (n, line) in text.lines().enumerate() {
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
@@ -306,8 +434,10 @@ fn read_xyz(path: &Path, cells: &mut Voxels<'_>) -> Result<(), CloudError> {
         let mut xyz = [0.0f64; 3];
         for (a, f) in xyz.iter_mut().zip(&fields) {
             *a = f
-                .parse()
-                .map_err(|_| bad(format!("'{f}' is not a number")))?;
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(format!("'{f}' is not a finite number")))?;
         }
         let code = match fields.get(3) {
             None => 1,
@@ -315,7 +445,7 @@ fn read_xyz(path: &Path, cells: &mut Voxels<'_>) -> Result<(), CloudError> {
                 .parse::<u8>()
                 .map_err(|_| bad(format!("class '{f}' is not a code from 0 to 255")))?,
         };
-        cells.add(DVec3::from_array(xyz), code)?;
+        cells.add(DVec3::from_array(xyz), code).map_err(bad)?;
     }
     Ok(())
 }

@@ -10,8 +10,9 @@ use std::io;
 use crate::message::edit_distance;
 use std::path::{Path, PathBuf};
 
-/// Largest survey file read, bytes.
-pub const MAX_SURVEY_BYTES: u64 = 256 << 20;
+/// Largest survey file read, bytes (its arrays are bounded too, before
+/// it is parsed: `survey::size`).
+pub const MAX_SURVEY_BYTES: u64 = 16 << 20;
 
 /// Largest mesh, raster, point cloud or glTF buffer read, bytes.
 pub const MAX_INPUT_BYTES: u64 = 16 << 30;
@@ -65,6 +66,39 @@ pub fn read_input(path: &Path, max_bytes: u64) -> io::Result<Vec<u8>> {
     let mut bytes = Vec::with_capacity(len as usize);
     file.take(max_bytes).read_to_end(&mut bytes)?;
     Ok(bytes)
+}
+
+/// A text input read whole after [`check_input`]: UTF-8, without the
+/// byte-order mark an editor may put first (U+FEFF, which would otherwise
+/// stick to the first word: a CSV's first column name, a survey's first
+/// key). An error names the line of the first byte that is not UTF-8.
+pub fn read_text(path: &Path, max_bytes: u64) -> io::Result<String> {
+    let bytes = read_input(path, max_bytes)?;
+    let text = String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        io::Error::new(
+            io::ErrorKind::InvalidData,
+            format!(
+                "line {line}: not valid UTF-8 (byte {}): save the file as UTF-8 text",
+                at + 1
+            ),
+        )
+    })?;
+    Ok(match text.strip_prefix(BOM) {
+        Some(rest) => rest.to_string(),
+        None => text,
+    })
+}
+
+/// The byte-order mark (U+FEFF) some editors put at the start of UTF-8
+/// text.
+pub const BOM: char = '\u{feff}';
+
+/// `line` without a leading byte-order mark (for readers that take a
+/// file's lines one at a time: its first line).
+pub fn strip_bom(line: &str) -> &str {
+    line.strip_prefix(BOM).unwrap_or(line)
 }
 
 /// A file beside `path` whose name is within two edits of its name (the

@@ -19,17 +19,8 @@ pub fn read_trajectory(
     path: &Path,
     interpolation: Interpolation,
 ) -> Result<Vec<(f64, Track)>, String> {
-    let bytes = crate::io::input::read_input(path, crate::io::input::MAX_TRAJECTORY_BYTES)
+    let text = crate::io::input::read_text(path, crate::io::input::MAX_TRAJECTORY_BYTES)
         .map_err(|e| format!("cannot read trajectory file '{}': {e}", path.display()))?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        let at = e.utf8_error().valid_up_to();
-        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
-        format!(
-            "'{}' line {line}: not valid UTF-8 (byte {}): a trajectory is a CSV text file",
-            path.display(),
-            at + 1
-        )
-    })?;
     let mut rows = text
         .lines()
         .enumerate()
@@ -38,15 +29,45 @@ pub fn read_trajectory(
         return Err(format!("'{}' is empty", path.display()));
     };
     let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    let col = |want: &[&str]| names.iter().position(|n| want.contains(n));
+    if let Some((i, name)) = names
+        .iter()
+        .enumerate()
+        .find(|(i, n)| names[..*i].contains(n))
+    {
+        return Err(format!(
+            "'{}' line 1: column {} is named `{name}`, as column {} is: name each column once",
+            path.display(),
+            i + 1,
+            names.iter().position(|n| n == name).unwrap_or(0) + 1
+        ));
+    }
+    // Columns of one meaning under two of its names are just as ambiguous.
+    let col = |want: &[&str]| -> Result<Option<usize>, String> {
+        let found: Vec<usize> = (0..names.len())
+            .filter(|&i| want.contains(&names[i]))
+            .collect();
+        match found.as_slice() {
+            [] => Ok(None),
+            [i] => Ok(Some(*i)),
+            [i, j, ..] => Err(format!(
+                "'{}' line 1: columns {} (`{}`) and {} (`{}`) both give {}: keep one",
+                path.display(),
+                i + 1,
+                names[*i],
+                j + 1,
+                names[*j],
+                want[0]
+            )),
+        }
+    };
     let need = [
-        col(&["time_s", "gps_time_s", "time"]),
-        col(&["x_m", "x"]),
-        col(&["y_m", "y"]),
-        col(&["z_m", "z"]),
-        col(&["roll_deg", "roll"]),
-        col(&["pitch_deg", "pitch"]),
-        col(&["yaw_deg", "yaw"]),
+        col(&["time_s", "gps_time_s", "time"])?,
+        col(&["x_m", "x"])?,
+        col(&["y_m", "y"])?,
+        col(&["z_m", "z"])?,
+        col(&["roll_deg", "roll"])?,
+        col(&["pitch_deg", "pitch"])?,
+        col(&["yaw_deg", "yaw"])?,
     ];
     let wanted = [
         "time_s",
@@ -71,7 +92,7 @@ pub fn read_trajectory(
             }
         }
     }
-    let line_col = col(&["line"]);
+    let line_col = col(&["line"])?;
     // Consecutive rows of one `line` value, as (line value, samples).
     let mut segments: Vec<(String, Vec<TrackSample>)> = Vec::new();
     for (n, row) in rows {

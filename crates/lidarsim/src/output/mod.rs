@@ -8,20 +8,22 @@
 //! (`NAME.partial`) and rename to the final name only when complete, so an
 //! interrupted or failed run never leaves a file that looks finished.
 
+pub mod checksum;
 pub mod crs;
 #[cfg(target_os = "linux")]
 mod direct;
 mod las;
 pub mod layout;
+pub mod own;
 pub mod part;
 mod ply;
 pub mod text;
 mod xyz;
 
 pub use las::{
-    Digitizer, JoinedLas, LasJoin, LasSettings, LasWriter, POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN,
-    WAVEFORM_BITS, WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN, return_numbers,
-    scan_angle_units,
+    Digitizer, HEADER_SIZE_14, HeaderError, JoinedLas, LasJoin, LasSettings, LasWriter,
+    POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN, RawHeader, WAVEFORM_BITS, WAVEFORM_DESCRIPTORS,
+    WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN, return_numbers, scan_angle_units,
 };
 pub use ply::{PLY_PROPERTIES, PLY_RECORD_LEN, PlyWriter};
 pub use xyz::XyzWriter;

@@ -17,6 +17,7 @@ use serde::Serialize;
 
 use crate::accel::RayCaster;
 use crate::geometry::{Aabb, DVec3, Ray, SPEED_OF_LIGHT_MPS};
+use crate::message::{fixed, num};
 use crate::survey::Survey;
 use crate::world::World;
 
@@ -34,6 +35,13 @@ pub struct LinePlan {
     /// Swath width `2·H·tan θ` (`/ cos α` for channels tilted `α` along
     /// the track), or less where the ground's echo is lost, m.
     pub swath_width_m: f64,
+    /// The swath's edges across the track from the ground below the
+    /// scanner, m, positive to the left of the flight direction (channels
+    /// that look to one side move them).
+    pub swath_edges_m: [f64; 2],
+    /// Share of the pulses whose beam looks at or above the horizon: they
+    /// cannot reach the ground.
+    pub upward_share: f64,
     /// Off-nadir angle beyond which the ground under the line returns no
     /// echo, degrees, when that cuts the scan (a scanner looking to the
     /// horizon).
@@ -115,15 +123,20 @@ pub fn plan(survey: &Survey, world: &World) -> Plan {
         let pulses = (survey.pulses_of(line) as f64 * s.deflector.emitted_share()).round() as u64;
         let step_rad = s.deflector.pulse_step_rad(s.prf_hz);
         let prf = s.prf_hz * s.deflector.emitted_share() * sw.landing_share;
+        // A profiler's (or a narrow fan's) pulses cover at least their
+        // footprint.
+        let covered = w.max(h * s.divergence_rad);
         lines.push(LinePlan {
             line: line.index + 1,
             pulses,
             duration_s: line.duration_s(),
             height_above_ground_m: h,
             swath_width_m: w,
+            swath_edges_m: [sw.edges_m.0, sw.edges_m.1],
+            upward_share: sw.upward_share,
             echo_limit_deg: sw.echo_limit_rad.map(f64::to_degrees),
-            point_density_per_m2: if w > 0.0 {
-                prf / (line.speed_mps * w)
+            point_density_per_m2: if covered > 0.0 && sw.landing_share > 0.0 {
+                prf / (line.speed_mps * covered)
             } else {
                 0.0
             },
@@ -184,10 +197,12 @@ pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
         let n = lp.line;
         if let Some((p, above)) = ground_above(caster, line) {
             out.push(format!(
-                "flight line {n} flies below the ground: at x {:.1} m, y {:.1} m the ground is \
-                 {above:.1} m above the scanner, whose pulses point down and cannot reach the \
-                 scene; raise the line (its z or altitude_m)",
-                p.x, p.y
+                "flight line {n} flies below the ground: at x {} m, y {} m the ground is {} m \
+                 above the scanner, whose pulses point down and cannot reach the scene; raise \
+                 the line (its z or altitude_m)",
+                fixed(p.x, 1),
+                fixed(p.y, 1),
+                fixed(above, 1)
             ));
             continue;
         }
@@ -203,23 +218,25 @@ pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
         let edge = h / theta.cos();
         if h > 0.0 && h < s.min_range_m {
             out.push(format!(
-                "flight line {n}: the ground is {h:.1} m below the scanner, nearer than \
+                "flight line {n}: the ground is {} m below the scanner, nearer than \
                  scanner.min_range_m = {} m: no echo from it will be recorded",
-                s.min_range_m
+                fixed(h, 1),
+                num(s.min_range_m)
             ));
         } else if h > s.max_range_m {
             out.push(format!(
-                "flight line {n}: the ground is {h:.1} m below the scanner, beyond \
+                "flight line {n}: the ground is {} m below the scanner, beyond \
                  scanner.max_range_m = {} m: no echo from it will be recorded",
-                s.max_range_m
+                fixed(h, 1),
+                num(s.max_range_m)
             ));
         } else if edge > s.max_range_m {
             out.push(format!(
-                "flight line {n}: at the swath edges (scan angle {:.1}°) the ground is {edge:.1} m \
-                 away, beyond scanner.max_range_m = {} m: pulses near the edges record no \
-                 ground echo",
-                theta.to_degrees(),
-                s.max_range_m
+                "flight line {n}: at the swath edges (scan angle {}°) the ground is {} m away, \
+                 beyond scanner.max_range_m = {} m: pulses near the edges record no ground echo",
+                fixed(theta.to_degrees(), 1),
+                fixed(edge, 1),
+                num(s.max_range_m)
             ));
         }
         // The farthest ground with an echo: the scan's edge, or nearer
@@ -230,13 +247,18 @@ pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
             farthest = Some((r, n));
         }
         // The area the line's pulses can reach: its path (sampled, for
-        // curved tracks) widened by half the swath and the footprint.
-        let reach = lp.swath_width_m / 2.0 + lp.footprint_diameter_m + 1.0;
+        // curved tracks) with the swath's edges to either side, widened by
+        // the footprint.
+        let reach = lp.footprint_diameter_m + 1.0;
+        let along = (line.end_m - line.start_m).truncate().normalize_or_zero();
+        let left = DVec3::new(-along.y, along.x, 0.0);
         let mut area = Aabb::EMPTY;
         let samples = 64;
         for k in 0..=samples {
             let p = line.pose_at(line.duration_s() * f64::from(k) / f64::from(samples));
-            area = area.union_point(p.position_m);
+            for e in lp.swath_edges_m {
+                area = area.union_point(p.position_m + left * e);
+            }
         }
         let grow = DVec3::new(reach, reach, 0.0);
         let (lo, hi) = (area.min - grow, area.max + grow);
@@ -250,19 +272,21 @@ pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
             missing.push(n);
         }
     }
+    out.extend(upward_warning(plan));
     if let Some((r, n)) = farthest {
         let round_trip_s = 2.0 * r / SPEED_OF_LIGHT_MPS;
         let period_s = 1.0 / s.prf_hz;
         if r > 0.0 && round_trip_s > period_s {
             out.push(format!(
-                "multiple pulses in the air: on flight line {n} the echo from {r:.1} m away \
-                 returns after 2R/c = {:.2} µs, but pulses leave every 1/PRF = {:.2} µs \
+                "multiple pulses in the air: on flight line {n} the echo from {} m away \
+                 returns after 2R/c = {} µs, but pulses leave every 1/PRF = {} µs \
                  (scanner.prf_hz = {}); a real receiver would need multiple-time-around \
                  processing to assign such echoes, the simulation assigns each echo to its own \
                  pulse",
-                round_trip_s * 1e6,
-                period_s * 1e6,
-                s.prf_hz
+                fixed(r, 1),
+                fixed(round_trip_s * 1e6, 2),
+                fixed(period_s * 1e6, 2),
+                num(s.prf_hz)
             ));
         }
     }
@@ -271,15 +295,21 @@ pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
             "the scene is empty".to_string()
         } else {
             format!(
-                "the scene spans x {:.1} to {:.1} m, y {:.1} to {:.1} m",
-                scene.min.x, scene.max.x, scene.min.y, scene.max.y
+                "the scene spans x {} to {} m, y {} to {} m",
+                fixed(scene.min.x, 1),
+                fixed(scene.max.x, 1),
+                fixed(scene.min.y, 1),
+                fixed(scene.max.y, 1)
             )
         };
         if missing.len() == world.lines.len() {
             out.push(format!(
-                "no pulse can hit the scene: the swaths of the flight lines cover x {:.1} to \
-                 {:.1} m, y {:.1} to {:.1} m, but {scene_text}",
-                swaths.min.x, swaths.max.x, swaths.min.y, swaths.max.y
+                "no pulse can hit the scene: the swaths of the flight lines cover x {} to {} m, \
+                 y {} to {} m, but {scene_text}",
+                fixed(swaths.min.x, 1),
+                fixed(swaths.max.x, 1),
+                fixed(swaths.min.y, 1),
+                fixed(swaths.max.y, 1)
             ));
         } else {
             let list: Vec<String> = missing.iter().map(u32::to_string).collect();
@@ -291,6 +321,28 @@ pub fn warnings(survey: &Survey, world: &World, plan: &Plan) -> Vec<String> {
         }
     }
     out
+}
+
+/// The warning for beams that look at or above the horizon (channels
+/// tilted past it, or a deflector that sweeps beyond it), if any do.
+fn upward_warning(plan: &Plan) -> Option<String> {
+    let share = plan.lines.first()?.upward_share;
+    if share >= 1.0 {
+        Some(
+            "no pulse looks below the horizon (the channels' tilts and the deflector's \
+             angles point every beam level or upwards): no pulse can reach the ground or \
+             the scene below the aircraft"
+                .to_string(),
+        )
+    } else if share > 0.0 {
+        Some(format!(
+            "{:.1} % of the pulses look at or above the horizon (the channels' tilts and \
+             the deflector's angles): those pulses cannot reach the ground",
+            share * 100.0
+        ))
+    } else {
+        None
+    }
 }
 
 #[cfg(test)]

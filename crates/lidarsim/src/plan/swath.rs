@@ -28,21 +28,39 @@ const SAMPLES: usize = 20_000;
 pub(crate) struct Swath {
     /// Width across the track, m.
     pub width_m: f64,
+    /// Its edges across the track from nadir, m (x of the scanner frame,
+    /// to the left positive): symmetric unless channels look to one side.
+    pub edges_m: (f64, f64),
     /// Share of the emitted pulses that meet the ground inside it and
-    /// return an echo (1 unless the echo cuts the scan).
+    /// return an echo (1 unless the echo cuts the scan or beams look at or
+    /// above the horizon).
     pub landing_share: f64,
+    /// Share of the emitted pulses whose beam looks at or above the
+    /// horizon (never meeting level ground below the scanner).
+    pub upward_share: f64,
     /// Off-nadir angle beyond which level ground returns no echo, rad,
     /// when that is inside the field of view of some channel.
     pub echo_limit_rad: Option<f64>,
 }
 
+/// The cosine of the off-nadir angle of a beam that counts as meeting
+/// level ground: 89.9°, beyond which the ground is thousands of heights
+/// away.
+const HORIZON_COS: f64 = 1.75e-3;
+
 /// The swath of `survey` at `h` metres above level ground of `ground`'s
-/// material (`None`: the echo is not considered).
+/// material (`None`: the echo is not considered). Its edges are the
+/// deflector's across-track edges tilted along the track by each
+/// channel's mounting (exact for mirrors, polygons and the like); when a
+/// channel is turned about the vertical or an edge beam looks at or above
+/// the horizon, they come from the beams that land, sampled over one
+/// second.
 pub(crate) fn swath(survey: &Survey, h: f64, ground: Option<&Material>) -> Swath {
     let s = &survey.scanner;
     let theta = s.deflector.across_half_angle_rad();
     let mut cuts = false;
     let mut lowest_cos = 1.0f64;
+    let mut skyward = false;
     let (mut left, mut right) = (f64::INFINITY, f64::NEG_INFINITY);
     // Per channel: the cosine of the widest off-nadir angle with an echo.
     let limits: Vec<f64> = s
@@ -64,25 +82,41 @@ pub(crate) fn swath(survey: &Survey, h: f64, ground: Option<&Material>) -> Swath
             }
             for side in [-1.0, 1.0] {
                 let d = ch.mount() * DVec3::new(side * phi.sin(), 0.0, phi.cos());
+                skyward |= d.z < HORIZON_COS;
                 let x = h * d.x / d.z;
                 left = left.min(x);
                 right = right.max(x);
             }
-            reach
+            reach.max(HORIZON_COS)
         })
         .collect();
-    let width_m = if h > 0.0 {
-        (right - left).max(0.0)
+    // A channel turned about the vertical sweeps off the across-track
+    // plane: its edges are where its beams are, not at ±θ.
+    let turned = s.channels.iter().any(|ch| ch.yaw_rad != 0.0);
+    // Sampled always: a conic or rosette pattern looks along the track
+    // too, where a forward tilt can lift its beams past the horizon.
+    let sm = sample(survey, h, &limits);
+    if skyward || turned {
+        (left, right) = sm.edges_m;
+    }
+    let width_m = if h > 0.0 && left <= right {
+        right - left
     } else {
         0.0
     };
     Swath {
         width_m,
-        landing_share: if cuts {
-            landing_share(survey, &limits)
+        edges_m: if left <= right {
+            (left, right)
+        } else {
+            (0.0, 0.0)
+        },
+        landing_share: if cuts || skyward || turned || sm.upward_share > 0.0 {
+            sm.landing_share
         } else {
             1.0
         },
+        upward_share: sm.upward_share,
         echo_limit_rad: cuts.then(|| lowest_cos.acos()),
     }
 }
@@ -138,14 +172,24 @@ fn echo_cos(survey: &Survey, ch: &Channel, h: f64, ground: &Material) -> f64 {
     hi
 }
 
-/// Share of the emitted pulses whose beam (turned by its channel's
-/// mounting) is within the echo limit `limits[c]` (cosine of the off-nadir
-/// angle), from the deflector sampled over one second.
-fn landing_share(survey: &Survey, limits: &[f64]) -> f64 {
+/// The emitted pulses' beams sampled over one second: the share that
+/// meet level ground within the echo limit `limits[c]` (cosine of the
+/// off-nadir angle) of their channel, the share that look at or above the
+/// horizon, and the edges across the track, at height `h`, of the beams
+/// that land.
+#[derive(Clone, Copy, Debug)]
+struct Sampled {
+    landing_share: f64,
+    upward_share: f64,
+    edges_m: (f64, f64),
+}
+
+fn sample(survey: &Survey, h: f64, limits: &[f64]) -> Sampled {
     let s = &survey.scanner;
     let mounts: Vec<_> = s.channels.iter().map(Channel::mount).collect();
     let firing = FiringOrder::new(&s.channels);
-    let (mut emitted, mut landed) = (0usize, 0usize);
+    let (mut emitted, mut landed, mut upward) = (0usize, 0usize, 0usize);
+    let (mut left, mut right) = (f64::INFINITY, f64::NEG_INFINITY);
     for i in 0..SAMPLES {
         let t = (i as f64 + 0.5) / SAMPLES as f64;
         if !s.deflector.emits_at(t) {
@@ -153,13 +197,26 @@ fn landing_share(survey: &Survey, limits: &[f64]) -> f64 {
         }
         emitted += 1;
         let c = firing.channel_of(i as u64);
-        if (mounts[c] * s.deflector.direction_at(t)).z >= limits[c] {
+        let d = mounts[c] * s.deflector.direction_at(t);
+        if d.z < HORIZON_COS {
+            upward += 1;
+        } else if d.z >= limits[c] {
             landed += 1;
+            let x = h * d.x / d.z;
+            left = left.min(x);
+            right = right.max(x);
         }
     }
-    if emitted == 0 {
-        0.0
-    } else {
-        landed as f64 / emitted as f64
+    let share = |n: usize| {
+        if emitted == 0 {
+            0.0
+        } else {
+            n as f64 / emitted as f64
+        }
+    };
+    Sampled {
+        landing_share: share(landed),
+        upward_share: share(upward),
+        edges_m: (left, right),
     }
 }

@@ -59,14 +59,24 @@ impl Image {
         let mut enc = png::Encoder::new(&mut bytes, self.width as u32, self.height as u32);
         enc.set_color(png::ColorType::Rgb);
         enc.set_depth(png::BitDepth::Eight);
+        // The mark by which lidarsim knows its own pictures
+        // (`output::own`): it replaces no other file.
+        enc.add_text_chunk(
+            "Software".to_string(),
+            crate::output::own::PNG_SOFTWARE.to_string(),
+        )
+        .map_err(io::Error::other)?;
         let mut w = enc.write_header().map_err(io::Error::other)?;
         w.write_image_data(&self.rgb).map_err(io::Error::other)?;
         w.finish().map_err(io::Error::other)?;
         Ok(bytes)
     }
 
-    /// Saves as an 8-bit RGB PNG (written whole, then renamed into place).
+    /// Saves as an 8-bit RGB PNG (written whole, then renamed into place),
+    /// where no file is or over a picture lidarsim wrote
+    /// ([`crate::output::own`]).
     pub fn save_png(&self, path: &Path) -> io::Result<()> {
+        crate::output::own::check_replaceable(path, crate::output::own::Mark::Png)?;
         crate::output::write_atomic(path, &self.to_png()?)
     }
 }

@@ -274,6 +274,9 @@ pub(crate) enum Source<'a> {
         parts: &'a [merge::PartInput],
         /// The writer of `points.las`, holding every part's points.
         joined: Option<Box<LasWriter>>,
+        /// A file the merge leaves even if it fails: the first part's
+        /// LAS file, moved into the output to be joined to.
+        keep: Option<PathBuf>,
     },
 }
 
@@ -285,7 +288,12 @@ pub(crate) fn execute(
     options: &RunOptions<'_>,
     source: Source<'_>,
 ) -> Result<Summary, RunError> {
-    std::thread::scope(|scope| execute_in(scope, survey, world, out_dir, options, source))
+    // Dropped once the scope's threads (a merge's trajectory writer) have
+    // ended: a failed fresh run or merge removes what they wrote too.
+    let mut written = None;
+    std::thread::scope(|scope| {
+        execute_in(scope, survey, world, out_dir, options, source, &mut written)
+    })
 }
 
 /// The trajectory files, by name, and whether each is the observed one.
@@ -323,15 +331,20 @@ fn execute_in<'scope>(
     out_dir: &'scope Path,
     options: &RunOptions<'_>,
     source: Source<'_>,
+    written: &mut Option<outdir::Rollback>,
 ) -> Result<Summary, RunError> {
     let io_err = |path: &Path| {
         let path = path.to_path_buf();
         move |source| RunError { path, source }
     };
     // A merge's parts, and the writer holding its stitched parts' points.
-    let (parts, joined) = match source {
-        Source::Simulate => (None, None),
-        Source::Parts { parts, joined } => (Some(parts), joined),
+    let (parts, joined, keep) = match source {
+        Source::Simulate => (None, None, None),
+        Source::Parts {
+            parts,
+            joined,
+            keep,
+        } => (Some(parts), joined, keep),
     };
     let summary_path = out_dir.join("summary.json");
     let state_path = out_dir.join(REPORT_STATE);
@@ -367,6 +380,9 @@ fn execute_in<'scope>(
         }
         (None, Vec::new())
     };
+    // A fresh run or merge that fails from here on leaves nothing of its
+    // own behind; a resumed one keeps what lets it be resumed again.
+    *written = prev.is_none().then(|| outdir::Rollback::new(out_dir, keep));
 
     // What the run will cost, refused before any work when it cannot fit.
     let budget = crate::budget::estimate(survey, world, options.threads);
@@ -526,6 +542,9 @@ fn execute_in<'scope>(
         let json =
             serde_json::to_vec_pretty(&summary).map_err(|e| io_err(&summary_path)(e.into()))?;
         write_atomic(&summary_path, &json).map_err(io_err(&summary_path))?;
+        if let Some(w) = written.take() {
+            w.done();
+        }
         return Ok(summary);
     }
     for s in sinks {
@@ -570,6 +589,9 @@ fn execute_in<'scope>(
     match std::fs::remove_file(&state_path) {
         Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(io_err(&state_path)(e)),
         _ => {}
+    }
+    if let Some(w) = written.take() {
+        w.done();
     }
     Ok(summary)
 }

@@ -118,29 +118,102 @@ fn error(path: &Path, kind: io::ErrorKind, message: String) -> RunError {
     }
 }
 
-/// Refuses an output directory in which a run would write over one of its
-/// `inputs` (the survey file, meshes, rasters, clouds, trajectory file).
-pub fn check_inputs(dir: &Path, inputs: &[PathBuf]) -> Result<(), RunError> {
-    let Ok(dir) = std::fs::canonicalize(dir) else {
-        // A directory that does not exist yet holds no input.
-        return Ok(());
+/// `path` made absolute, with symbolic links and `..` resolved as far as it
+/// exists (the rest, not yet created, appended as written): two names of
+/// one directory resolve to the same path, whether or not it exists yet.
+pub fn resolved(path: &Path) -> PathBuf {
+    use std::path::Component;
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut existing = absolute.as_path();
+    let mut rest = Vec::new();
+    let mut base = loop {
+        if let Ok(found) = std::fs::canonicalize(existing) {
+            break found;
+        }
+        match (existing.parent(), existing.file_name()) {
+            (Some(parent), Some(name)) => {
+                rest.push(name.to_os_string());
+                existing = parent;
+            }
+            // `..` or the root itself: nothing to resolve.
+            _ => break existing.to_path_buf(),
+        }
     };
+    for name in rest.iter().rev() {
+        match Path::new(name).components().next() {
+            Some(Component::ParentDir) => {
+                base.pop();
+            }
+            Some(Component::CurDir) | None => {}
+            _ => base.push(name),
+        }
+    }
+    base
+}
+
+/// Refuses an output directory in which a run would write over, or
+/// remove, one of its `inputs` (the survey file, meshes, rasters, clouds,
+/// trajectory file): an input named as a file a run writes directly in
+/// it, or one inside the subdirectories a run clears there
+/// ([`DATA_DIR`], [`LAYOUT_DIRS`]).
+pub fn check_inputs(dir: &Path, inputs: &[PathBuf]) -> Result<(), RunError> {
+    let dir = resolved(dir);
+    let cleared: Vec<PathBuf> = std::iter::once(DATA_DIR)
+        .chain(LAYOUT_DIRS)
+        .map(|sub| dir.join(sub))
+        .collect();
     for input in inputs {
-        let (Some(name), Ok(full)) = (input.file_name(), std::fs::canonicalize(input)) else {
+        let full = resolved(input);
+        let Some(name) = full.file_name().map(|n| n.to_string_lossy().into_owned()) else {
             continue;
         };
-        let name = name.to_string_lossy();
-        if full.parent() == Some(dir.as_path()) && is_run_file(&name) {
+        let written = full.parent() == Some(dir.as_path()) && is_run_file(&name);
+        if written || cleared.iter().any(|sub| full.starts_with(sub)) {
             return Err(error(
                 input,
                 io::ErrorKind::AlreadyExists,
                 format!(
-                    "the run would write over this input file (a run writes {name} into its \
-                     output directory {}): choose another output directory",
+                    "the run would write over or remove this input file (a run writes {} \
+                     in its output directory {}): choose another output directory",
+                    if written {
+                        name
+                    } else {
+                        full.display().to_string()
+                    },
                     dir.display()
                 ),
             ));
         }
+    }
+    Ok(())
+}
+
+/// Refuses an output directory that is, lies inside or holds one of the
+/// directories a merge reads (`part_dirs`): the merge would clear what it
+/// reads, and taking the parts would remove its own output. Checked before
+/// anything is written.
+pub fn check_parts(dir: &Path, part_dirs: &[PathBuf]) -> Result<(), RunError> {
+    let out = resolved(dir);
+    for part in part_dirs {
+        let p = resolved(part);
+        let why = if out == p {
+            "is the directory of a part it merges"
+        } else if out.starts_with(&p) {
+            "lies inside the directory of a part it merges"
+        } else if p.starts_with(&out) {
+            "holds the directory of a part it merges"
+        } else {
+            continue;
+        };
+        return Err(error(
+            dir,
+            io::ErrorKind::AlreadyExists,
+            format!(
+                "the merge's output directory {why} ({}): a merge never writes where its \
+                 parts are; choose an output directory outside every part",
+                part.display()
+            ),
+        ));
     }
     Ok(())
 }
@@ -181,22 +254,10 @@ pub fn claim(dir: &Path, overwrite: bool) -> Result<Claimed, RunError> {
         path: dir.to_path_buf(),
         source: io::Error::new(e.kind(), format!("cannot create the output directory: {e}")),
     })?;
-    let listed = |e: io::Error| RunError {
-        path: dir.to_path_buf(),
-        source: e,
-    };
-    let mut ours = Vec::new();
-    let mut others = Vec::new();
-    let own = own_dirs(dir);
-    for entry in std::fs::read_dir(dir).map_err(listed)? {
-        let entry = entry.map_err(listed)?;
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if is_run_file(&name) {
-            ours.push(entry.path());
-        } else if !own.iter().any(|(sub, _)| *sub == name) {
-            others.push(name);
-        }
-    }
+    let Listing {
+        claimed: ours,
+        mut others,
+    } = list(dir)?;
     let marked = dir.join(MARKER).exists();
     if !others.is_empty() && !marked && !overwrite {
         others.sort();
@@ -211,14 +272,14 @@ pub fn claim(dir: &Path, overwrite: bool) -> Result<Claimed, RunError> {
             io::ErrorKind::AlreadyExists,
             format!(
                 "the output directory is not empty and no lidarsim run wrote it (it holds {}{more}): \
-                 choose a new or empty directory, or pass --overwrite to replace only the \
-                 files a run writes ({}) and keep the rest",
+                 choose a new or empty directory, or pass --overwrite (overwrite=True in Python) \
+                 to replace only the files a run writes ({}) and keep the rest",
                 shown.join(", "),
                 RUN_FILES.join(", ")
             ),
         ));
     }
-    for path in &ours {
+    for path in &ours.files {
         let meta = std::fs::symlink_metadata(path).map_err(|e| RunError {
             path: path.clone(),
             source: e,
@@ -231,11 +292,93 @@ pub fn claim(dir: &Path, overwrite: bool) -> Result<Claimed, RunError> {
             ));
         }
     }
-    Ok(Claimed {
-        dir: dir.to_path_buf(),
-        files: ours,
-        own,
+    Ok(ours)
+}
+
+/// What a directory holds: the files and subdirectories a run writes, and
+/// the names of everything else.
+struct Listing {
+    claimed: Claimed,
+    others: Vec<String>,
+}
+
+/// Lists `dir` into what a run wrote there and what it did not.
+fn list(dir: &Path) -> Result<Listing, RunError> {
+    let listed = |e: io::Error| RunError {
+        path: dir.to_path_buf(),
+        source: e,
+    };
+    let mut files = Vec::new();
+    let mut others = Vec::new();
+    let own = own_dirs(dir);
+    for entry in std::fs::read_dir(dir).map_err(listed)? {
+        let entry = entry.map_err(listed)?;
+        let name = entry.file_name().to_string_lossy().into_owned();
+        if is_run_file(&name) {
+            if name != MARKER {
+                files.push(entry.path());
+            }
+        } else if !own.iter().any(|(sub, _)| *sub == name) {
+            others.push(name);
+        }
+    }
+    Ok(Listing {
+        claimed: Claimed {
+            dir: dir.to_path_buf(),
+            files,
+            own,
+        },
+        others,
     })
+}
+
+/// Removes what a fresh run or merge wrote into `dir` before it failed —
+/// every file a run writes, finished or `.partial`, and the run's own
+/// subdirectories — but `keep` (a part's file moved in, the only copy of
+/// its points), so that no output of a failed run looks complete. The run
+/// cleared `dir` of such files when it began, so each of them is its own;
+/// anything else in `dir` is left, and so is the marker.
+pub fn roll_back(dir: &Path, keep: Option<&Path>) -> Result<(), RunError> {
+    list(dir)?.claimed.remove(keep)
+}
+
+/// The output directory of a fresh run or merge while it is written: if
+/// the run fails (this is dropped before [`Rollback::done`]), what it
+/// wrote is removed ([`roll_back`]), but `keep`.
+#[derive(Debug)]
+pub struct Rollback {
+    dir: PathBuf,
+    keep: Option<PathBuf>,
+    armed: bool,
+}
+
+impl Rollback {
+    /// Armed for `dir`, cleared by this run already; `keep` is left even
+    /// when the run fails.
+    pub fn new(dir: &Path, keep: Option<PathBuf>) -> Self {
+        Self {
+            dir: dir.to_path_buf(),
+            keep,
+            armed: true,
+        }
+    }
+
+    /// The run is complete, or stopped with what it needs to go on: its
+    /// files stay.
+    pub fn done(mut self) {
+        self.armed = false;
+    }
+}
+
+impl Drop for Rollback {
+    fn drop(&mut self) {
+        if self.armed {
+            // The run's own error is the one reported; a file that cannot
+            // be removed keeps its `.partial` name or stands beside no
+            // summary.
+            let _ = roll_back(&self.dir, self.keep.as_deref());
+        }
+    }
 }
 
 impl Claimed {
@@ -243,6 +386,20 @@ impl Claimed {
     /// files (but `keep`, a file this run has begun meanwhile) and writes
     /// the marker.
     pub fn clear(self, keep: Option<&Path>) -> Result<(), RunError> {
+        let dir = self.dir.clone();
+        self.remove(keep)?;
+        crate::output::write_atomic(
+            &dir.join(MARKER),
+            b"lidarsim writes its runs into this directory; a new run replaces only its own files.\n",
+        )
+        .map_err(|e| RunError {
+            path: dir.join(MARKER),
+            source: e,
+        })
+    }
+
+    /// Removes the files and subdirectories listed, but `keep`.
+    fn remove(self, keep: Option<&Path>) -> Result<(), RunError> {
         for path in self.files {
             if keep == Some(path.as_path()) {
                 continue;
@@ -272,14 +429,7 @@ impl Claimed {
             let path = self.dir.join(sub);
             std::fs::remove_dir(&path).map_err(|e| RunError { path, source: e })?;
         }
-        crate::output::write_atomic(
-            &self.dir.join(MARKER),
-            b"lidarsim writes its runs into this directory; a new run replaces only its own files.\n",
-        )
-        .map_err(|e| RunError {
-            path: self.dir.join(MARKER),
-            source: e,
-        })
+        Ok(())
     }
 }
 
@@ -370,10 +520,88 @@ mod tests {
         let survey = d.join("survey.toml");
         std::fs::write(&survey, "# mine").unwrap();
         let e = check_inputs(&d, std::slice::from_ref(&survey)).unwrap_err();
-        assert!(e.to_string().contains("write over this input"), "{e}");
+        assert!(
+            e.to_string().contains("write over or remove this input"),
+            "{e}"
+        );
         let other = d.join("my-survey.toml");
         std::fs::write(&other, "# mine").unwrap();
-        check_inputs(&d, &[other]).unwrap();
+        check_inputs(&d, std::slice::from_ref(&other)).unwrap();
+        // One the run would clear with its scene directory, named through
+        // `..`: refused too.
+        std::fs::create_dir_all(d.join(DATA_DIR)).unwrap();
+        let mesh = d.join(DATA_DIR).join("mesh-0.obj");
+        std::fs::write(&mesh, "v 0 0 0").unwrap();
+        let roundabout = d
+            .join(DATA_DIR)
+            .join("..")
+            .join(DATA_DIR)
+            .join("mesh-0.obj");
+        let e = check_inputs(&d, &[roundabout]).unwrap_err();
+        assert!(e.to_string().contains("mesh-0.obj"), "{e}");
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    /// The output of a merge may not be a part's directory, lie inside
+    /// one or hold one, however the paths are written (a trailing `/.`,
+    /// `..`, a link) and whether or not the output exists yet.
+    #[test]
+    fn a_merge_output_that_is_inside_or_holds_a_part_is_refused() {
+        let d = temp("parts");
+        let part = d.join("p1");
+        std::fs::create_dir_all(&part).unwrap();
+        let refused = |out: &Path| check_parts(out, std::slice::from_ref(&part)).unwrap_err();
+        assert!(
+            refused(&part.join("."))
+                .to_string()
+                .contains("is the directory")
+        );
+        let inside = part.join("merged").join("..").join("deeper");
+        assert!(refused(&inside).to_string().contains("lies inside"));
+        assert!(refused(&d).to_string().contains("holds"));
+        #[cfg(unix)]
+        {
+            let link = d.join("link");
+            std::os::unix::fs::symlink(&part, &link).unwrap();
+            assert!(
+                refused(&link.join("out"))
+                    .to_string()
+                    .contains("lies inside")
+            );
+        }
+        check_parts(&d.join("p10"), std::slice::from_ref(&part)).unwrap();
+        check_parts(&d.join("out"), std::slice::from_ref(&part)).unwrap();
+        std::fs::remove_dir_all(&d).ok();
+    }
+
+    /// A failed run removes the run's files it wrote, finished or not,
+    /// and leaves everything else — and the file it was told to keep.
+    #[test]
+    fn a_roll_back_removes_only_what_a_run_writes() {
+        let d = temp("rollback");
+        prepare_fresh(&d, false).unwrap();
+        for f in [
+            "survey.toml",
+            "trajectory.csv",
+            "points.las.partial",
+            "notes.txt",
+        ] {
+            std::fs::write(d.join(f), f).unwrap();
+        }
+        std::fs::create_dir_all(d.join("strips")).unwrap();
+        std::fs::write(d.join("strips").join("line-0001.las"), "l").unwrap();
+        let kept = d.join("points.las.partial");
+        drop(Rollback::new(&d, Some(kept.clone())));
+        let mut left: Vec<String> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        assert_eq!(left, [MARKER, "notes.txt", "points.las.partial"]);
+        // Done: nothing is removed.
+        std::fs::write(d.join("summary.json"), "{}").unwrap();
+        Rollback::new(&d, None).done();
+        assert!(d.join("summary.json").exists());
         std::fs::remove_dir_all(&d).ok();
     }
 }

@@ -18,10 +18,11 @@ use serde::{Deserialize, Serialize};
 
 use super::resume::fnv1a_hex;
 use super::{RunError, RunOptions, outdir, write_survey};
+use crate::output::checksum::file_crc32;
 use crate::output::part::PartWriter;
 use crate::output::{LasWriter, PointSink, write_atomic};
 use crate::report::ReportSink;
-use crate::sim::parts::{PulseRange, split};
+use crate::sim::parts::{MAX_PARTS, PulseRange, split};
 use crate::sim::{RunControl, RunCounts, Simulator, Timer};
 use crate::survey::Survey;
 use crate::world::World;
@@ -70,13 +71,75 @@ pub struct PartRecord {
     /// Bytes of the report's state (`report.state`) of a stitched part; 0
     /// for none.
     pub report_bytes: u64,
+    /// CRC-32 of the point file ([`crate::output::checksum`]); the merge
+    /// joins a file only when it still has it.
+    #[serde(default)]
+    pub points_crc32: Option<String>,
+    /// CRC-32 of the report's state, when there is one.
+    #[serde(default)]
+    pub report_crc32: Option<String>,
     /// Threads it ran on.
     pub threads: usize,
     /// Wall-clock time of its simulation, s.
     pub wall_time_s: f64,
+    /// Every file the part wrote into its directory, this record and the
+    /// output marker included, by name (`scene/…` for scene data): what
+    /// a merge that takes the parts removes, and all it removes.
+    #[serde(default)]
+    pub files: Vec<String>,
+}
+
+/// Refuses part `k` of `n` unless `1 ≤ k ≤ n ≤ MAX_PARTS`, saying why.
+pub fn check_part_number(k: usize, n: usize) -> Result<(), String> {
+    if n == 0 || n > MAX_PARTS {
+        return Err(format!(
+            "part {k}/{n}: N must be from 1 to {MAX_PARTS}, the most parts a survey is split into"
+        ));
+    }
+    if !(1..=n).contains(&k) {
+        return Err(format!("part {k}/{n}: K must be from 1 to N"));
+    }
+    Ok(())
+}
+
+/// Whether `name` (relative to a part's directory) is a file a part run
+/// writes: its record, points, report state, survey, the output marker or
+/// a scene data file under [`outdir::DATA_DIR`].
+pub fn is_part_file(name: &str) -> bool {
+    match name.split_once('/') {
+        Some((dir, file)) => dir == outdir::DATA_DIR && outdir::is_data_file(file),
+        None => [
+            PART_RECORD,
+            PART_POINTS,
+            PART_LAS,
+            super::REPORT_STATE,
+            "survey.toml",
+            outdir::MARKER,
+        ]
+        .contains(&name),
+    }
 }
 
 impl PartRecord {
+    /// The files the part wrote ([`PartRecord::files`]); a record of an
+    /// earlier version, which lists none, wrote its record, points, report
+    /// state, survey and the marker.
+    pub fn written(&self) -> Vec<String> {
+        if !self.files.is_empty() {
+            return self.files.clone();
+        }
+        let mut files = vec![
+            PART_RECORD.to_string(),
+            self.points_file.clone(),
+            "survey.toml".to_string(),
+            outdir::MARKER.to_string(),
+        ];
+        if self.report_bytes > 0 {
+            files.push(super::REPORT_STATE.to_string());
+        }
+        files
+    }
+
     /// The counts it recorded.
     pub(super) fn counts(&self) -> RunCounts {
         let mut c = RunCounts {
@@ -133,15 +196,11 @@ pub fn run_part(
     out_dir: &Path,
     options: &RunOptions<'_>,
 ) -> Result<PartRecord, RunError> {
-    if !(1..=n).contains(&k) {
-        return Err(error(
-            out_dir,
-            io::ErrorKind::InvalidInput,
-            format!("part {k}/{n}: K must be from 1 to N"),
-        ));
-    }
+    check_part_number(k, n).map_err(|why| error(out_dir, io::ErrorKind::InvalidInput, why))?;
     outdir::check_inputs(out_dir, &crate::files::input_files(survey))?;
     outdir::prepare_fresh(out_dir, options.overwrite)?;
+    // A part that fails leaves nothing of its own behind.
+    let written = outdir::Rollback::new(out_dir, None);
     let text = write_survey(survey, out_dir)?;
     let ranges = part_ranges(survey, world, k, n);
     let sim = Simulator::new(survey, world).with_waveforms(survey.output.formats.las_waveform);
@@ -187,20 +246,36 @@ pub fn run_part(
         }
     };
     let (mut points_bytes, mut report_bytes) = (0, 0);
+    let (mut points_crc32, mut report_crc32) = (None, None);
     if complete {
         sink.finish().map_err(|e| super::run_error(out_dir, e))?;
         points_bytes = std::fs::metadata(&points_path)
             .map_err(named(&points_path))?
             .len();
+        points_crc32 = Some(file_crc32(&points_path).map_err(|e| super::run_error(out_dir, e))?);
         if let Some(r) = &report {
             let path = out_dir.join(super::REPORT_STATE);
             let mut state = Vec::new();
             r.save(&mut state).map_err(named(&path))?;
             write_atomic(&path, &state).map_err(named(&path))?;
             report_bytes = state.len() as u64;
+            let mut hasher = crc32fast::Hasher::new();
+            hasher.update(&state);
+            report_crc32 = Some(format!("{:08x}", hasher.finalize()));
         }
     } else {
         drop(sink);
+    }
+    let mut files: Vec<String> = crate::files::data_files(survey)
+        .into_iter()
+        .map(|d| d.path)
+        .collect();
+    files.extend(["survey.toml", outdir::MARKER, PART_RECORD].map(String::from));
+    if complete {
+        files.push(points_file.to_string());
+        if report_bytes > 0 {
+            files.push(super::REPORT_STATE.to_string());
+        }
     }
     let c = outcome.counts;
     let last = c
@@ -224,11 +299,15 @@ pub fn run_part(
         points_file: points_file.to_string(),
         points_bytes,
         report_bytes,
+        points_crc32,
+        report_crc32,
         threads: options.threads,
         wall_time_s,
+        files,
     };
     let path = out_dir.join(PART_RECORD);
     let json = serde_json::to_vec_pretty(&record).map_err(|e| named(&path)(e.into()))?;
     write_atomic(&path, &json).map_err(named(&path))?;
+    written.done();
     Ok(record)
 }

@@ -11,6 +11,12 @@
 //! [`WHOLE_LINE_SLACK`] times the mean); otherwise each part takes an equal
 //! share of the pulses, cutting lines where it must.
 
+/// The most parts a survey is split into: enough for a job array of any
+/// cluster, few enough that the parts' ranges and a merge's bookkeeping
+/// stay small (a count read from a file or an argument is checked
+/// against it before it sizes anything).
+pub const MAX_PARTS: usize = 100_000;
+
 /// How far above the mean a part of whole lines may go before the parts
 /// cut lines instead: 1.25 times the mean number of pulses.
 pub const WHOLE_LINE_SLACK: f64 = 1.25;
@@ -38,12 +44,12 @@ impl PulseRange {
     }
 }
 
-/// The pulse ranges of each of `n` parts (`n ≥ 1`) of lines of
-/// `pulses_per_line` pulses, in order: part `k` of the result is part
-/// `k + 1` of `n`. A part may be empty when there are fewer pulses than
-/// parts.
+/// The pulse ranges of each of `n` parts (`1 ≤ n ≤ MAX_PARTS`; `n` is
+/// clamped to that range) of lines of `pulses_per_line` pulses, in order:
+/// part `k` of the result is part `k + 1` of `n`. A part may be empty when
+/// there are fewer pulses than parts.
 pub fn split(pulses_per_line: &[u64], n: usize) -> Vec<Vec<PulseRange>> {
-    let n = n.max(1);
+    let n = n.clamp(1, MAX_PARTS);
     let total: u64 = pulses_per_line.iter().sum();
     let bounds = whole_line_bounds(pulses_per_line, n).unwrap_or_else(|| {
         // Equal shares: the k-th cut at round(k·T / n).

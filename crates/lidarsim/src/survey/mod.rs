@@ -16,6 +16,7 @@ pub mod platform_preset;
 pub mod preset;
 pub mod raw;
 mod read;
+pub mod size;
 pub mod spec;
 
 pub use diagnostic::{Diagnostic, SurveyError};
@@ -277,6 +278,8 @@ impl Survey {
         seed: Option<u64>,
     ) -> Result<Self, SurveyError> {
         let file = path.map_or_else(|| "<survey>".to_string(), |p| p.display().to_string());
+        let text = crate::io::input::strip_bom(text);
+        size::check(text, &file)?;
         let locator = Locator::new(text);
         let diagnose = Diagnose {
             file: &file,

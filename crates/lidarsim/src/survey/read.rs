@@ -49,6 +49,17 @@ pub(crate) fn explain(message: &str) -> (String, Option<String>) {
             "integer {n} is too large: TOML integers are 64-bit (up to 9223372036854775807)"
         );
     }
+    // serde writes a float of the wrong type out in full: 1e300 as 301
+    // digits.
+    if let Some(rest) = m.strip_prefix("invalid type: floating point `")
+        && let Some((v, tail)) = rest.split_once('`')
+        && let Ok(v) = v.parse::<f64>()
+    {
+        m = format!(
+            "invalid type: floating point `{}`{tail}",
+            crate::message::num(v)
+        );
+    }
     if m.contains("did not match any variant of untagged enum NumberOrList") {
         m = "expected a number or an array of numbers".to_string();
     }

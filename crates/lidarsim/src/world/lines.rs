@@ -167,3 +167,139 @@ pub(super) fn check_las_scale(
         ));
     }
 }
+
+/// Most tile files a run writes: more would be a layout chosen by mistake
+/// (a `tile_m` of 1 m over a survey of hundreds of metres), each file a
+/// LAS header and an `fsync`.
+pub const MAX_TILES: u64 = 10_000;
+
+/// Refuses `[output] layout = "tiles"` with a `tile_m` that would cut the
+/// area the lines can reach (the scene's extent within each line's swath)
+/// into more than [`MAX_TILES`] tiles, before anything runs.
+pub(super) fn check_tiles(
+    survey: &Survey,
+    bounds: Aabb,
+    lines: &[FlightLine],
+    problems: &mut Vec<(KeyPath, String)>,
+) {
+    let crate::survey::Layout::Tiles(tile_m) = survey.output.layout else {
+        return;
+    };
+    let area = reachable_area(survey, bounds, lines);
+    if area.is_empty() {
+        return;
+    }
+    let e = area.extent();
+    let tiles = tiles_over(area, tile_m);
+    if tiles > MAX_TILES as f64 {
+        // The smallest round tile size that keeps to a tenth of the limit.
+        let fitting = (e.x * e.y / (MAX_TILES as f64 / 10.0)).sqrt();
+        let suggested = [1.0, 2.0, 5.0]
+            .iter()
+            .flat_map(|m| (0..12).map(move |p| m * 10f64.powi(p)))
+            .find(|&t| t >= fitting)
+            .unwrap_or(1e6);
+        problems.push((
+            KeyPath::root().key("output").key("tile_m"),
+            format!(
+                "tiles of {} m would cut the area the flight lines reach ({} m × {} m) into up \
+                 to {} files, more than the {MAX_TILES} a run writes: choose a larger tile_m \
+                 (for example {} m)",
+                num(tile_m),
+                num(e.x.round()),
+                num(e.y.round()),
+                num(tiles),
+                num(suggested)
+            ),
+        ));
+    }
+}
+
+/// Tiles of `tile_m` that `area` may touch, at most.
+pub fn tiles_over(area: Aabb, tile_m: f64) -> f64 {
+    if area.is_empty() {
+        return 0.0;
+    }
+    let e = area.extent();
+    let along = |len: f64| (len / tile_m).floor() + 2.0;
+    along(e.x) * along(e.y)
+}
+
+/// The part of the scene's extent `bounds` (in plan) within reach of the
+/// lines' pulses: each line's path, sampled, widened by the swath the
+/// deflector's widest angle gives over the height above the scene's bottom.
+pub fn reachable_area(survey: &Survey, bounds: Aabb, lines: &[FlightLine]) -> Aabb {
+    if bounds.is_empty() {
+        return Aabb::EMPTY;
+    }
+    let s = &survey.scanner;
+    let angle = (s.deflector.max_off_nadir_rad() + 0.5 * s.divergence_rad).min(1.5);
+    let mut area = Aabb::EMPTY;
+    for line in lines {
+        for k in 0..=64 {
+            let p = line
+                .pose_at(line.duration_s() * f64::from(k) / 64.0)
+                .position_m;
+            let h = (p.z - bounds.min.z).clamp(0.0, s.max_range_m);
+            let reach = DVec3::new(1.0, 1.0, 0.0) * (h * angle.tan() + 1.0);
+            area = area.union_point(p - reach).union_point(p + reach);
+        }
+    }
+    let (lo, hi) = (area.min.max(bounds.min), area.max.min(bounds.max));
+    if lo.x <= hi.x && lo.y <= hi.y {
+        Aabb {
+            min: DVec3::new(lo.x, lo.y, bounds.min.z),
+            max: DVec3::new(hi.x, hi.y, bounds.max.z),
+        }
+    } else {
+        Aabb::EMPTY
+    }
+}
+
+/// Refuses a flight whose GPS times are too large for `f64` to tell its
+/// pulses apart: at the last pulse the spacing of representable times must
+/// be at most a quarter of the pulse period (about 60 ns at the adjusted
+/// standard GPS times of today, 4·10⁸ s, fine for 2 MHz). The problem
+/// names the key that made the times large.
+pub(super) fn check_times(
+    survey: &Survey,
+    lines: &[FlightLine],
+    problems: &mut Vec<(KeyPath, String)>,
+) {
+    let Some(last) = lines.last() else {
+        return;
+    };
+    let start = survey.output.gps_start_time_s.unwrap_or(0.0);
+    let end = start + last.start_time_s + last.duration_s();
+    let period = 1.0 / survey.scanner.prf_hz;
+    // The spacing of f64 values near `end`.
+    let ulp = if end.is_finite() {
+        f64::from_bits(end.abs().to_bits() + 1) - end.abs()
+    } else {
+        f64::INFINITY
+    };
+    if ulp <= period / 4.0 {
+        return;
+    }
+    let root = KeyPath::root();
+    let turns = survey.turn_time_s * lines.len().saturating_sub(1) as f64;
+    let key = if lines.iter().any(|l| l.track.is_some()) && last.start_time_s > turns {
+        root.key("platform").key("trajectory_file")
+    } else if turns >= start {
+        root.key("platform").key("turn_time_s")
+    } else {
+        root.key("output").key("gps_start_time_s")
+    };
+    problems.push((
+        key,
+        format!(
+            "the flight's last pulse would have GPS time {} s, where 64-bit times are {} s \
+             apart, more than a quarter of the {} s between pulses: its pulses could not be \
+             told apart by time; keep the flight's times below {} s",
+            num(end),
+            num(ulp),
+            num(period),
+            num(period / 4.0 * 2f64.powi(52))
+        ),
+    ));
+}

@@ -9,6 +9,7 @@
 //! that named them.
 
 mod lines;
+pub use lines::{MAX_TILES, reachable_area, tiles_over};
 mod scene;
 
 use std::path::Path;
@@ -72,6 +73,8 @@ impl World {
         let built = scene::build(survey, &mut problems);
         let lines = lines::flight_lines(survey, &built.index, &mut problems);
         lines::check_las_scale(survey, built.index.scene_bounds(), &lines, &mut problems);
+        lines::check_tiles(survey, built.index.scene_bounds(), &lines, &mut problems);
+        lines::check_times(survey, &lines, &mut problems);
         if built.index.scene().primitives.is_empty() && problems.is_empty() {
             problems.push((
                 KeyPath::root(),

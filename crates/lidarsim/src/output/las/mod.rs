@@ -13,6 +13,7 @@
 //! describes the items, and bit 7 of the point data format byte marks the
 //! file as compressed.
 
+mod header;
 mod join;
 mod tally;
 mod vlr;
@@ -24,6 +25,7 @@ use std::path::{Path, PathBuf};
 use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
 
 use super::{AtomicFile, OutFile, PointRecord, PointSink, WaveformBlock, file_error};
+pub use header::{HEADER_SIZE_14, HeaderError, RawHeader};
 pub use join::{JoinedLas, LasJoin};
 use vlr::{ATTRIBUTE_FIELDS, ERROR_FIELDS, fixed_str};
 pub use wdp::{

@@ -7,30 +7,71 @@ use std::io;
 use std::path::{Path, PathBuf};
 
 use super::super::RunError;
-use super::super::part::{PART_LAS, PART_POINTS, PART_RECORD, PartRecord, error, stitched};
+use super::super::part::{
+    PART_LAS, PART_POINTS, PART_RECORD, PartRecord, error, is_part_file, stitched,
+};
 use super::super::resume::fnv1a_hex;
+use crate::output::checksum::file_crc32;
 use crate::survey::Survey;
+
+/// The largest part record read, bytes: a record lists its pulse ranges
+/// (a few per part) and files, a few kilobytes at most.
+const MAX_RECORD_BYTES: u64 = 1 << 20;
+
+/// The record of the part in `dir`, read as a survey's input files are
+/// (a regular file of bounded size: a device or a FIFO named `part.json`
+/// is refused, not read without end), or why not.
+fn read_record(dir: &Path) -> Result<Vec<u8>, io::Error> {
+    crate::io::input::read_input(&dir.join(PART_RECORD), MAX_RECORD_BYTES)
+}
 
 /// Whether the part in `dir` is done with: its record is there and says
 /// it is complete, or is no part's record at all (for [`read_part`] to
 /// refuse). A part writes its record last, whole: a directory without
 /// one, or whose part was stopped early, may still be written.
 pub(super) fn finished(dir: &Path) -> bool {
-    std::fs::read(dir.join(PART_RECORD)).is_ok_and(|bytes| {
-        serde_json::from_slice::<PartRecord>(&bytes).map_or(true, |record| record.complete)
-    })
+    match read_record(dir) {
+        Ok(bytes) => {
+            serde_json::from_slice::<PartRecord>(&bytes).map_or(true, |record| record.complete)
+        }
+        // Something that is not a file, or too large, is refused at once.
+        Err(e) => e.kind() != io::ErrorKind::NotFound,
+    }
+}
+
+/// Refuses a record whose counts could not come from a part run: more
+/// parts than a survey is split into, a part number outside them, more
+/// return numbers than LAS has, or a file a part never writes.
+fn check_counts(path: &Path, r: &PartRecord) -> Result<(), RunError> {
+    let bad = |why: String| error(path, io::ErrorKind::InvalidData, why);
+    super::super::part::check_part_number(r.part, r.parts)
+        .map_err(|why| bad(format!("is not a part's record: {why}")))?;
+    if r.points_by_return.len() > 15 || r.ranges.len() > 1 << 16 {
+        return Err(bad(format!(
+            "is not a part's record: it lists {} return numbers (LAS has 15) and {} pulse \
+             ranges",
+            r.points_by_return.len(),
+            r.ranges.len()
+        )));
+    }
+    if let Some(f) = r.files.iter().find(|f| !is_part_file(f)) {
+        return Err(bad(format!(
+            "lists {f:?} among the files its part wrote, but a part never writes such a file"
+        )));
+    }
+    Ok(())
 }
 
 /// A part directory's record, checked against its own files (its survey
-/// text by hash, its point and report files by length).
+/// text by hash, its point and report files by length and checksum).
 fn read_part(dir: &Path) -> Result<PartRecord, RunError> {
     let path = dir.join(PART_RECORD);
-    let bytes = std::fs::read(&path).map_err(|e| {
+    let bytes = read_record(dir).map_err(|e| {
         error(
-            dir,
+            &path,
             e.kind(),
             format!(
-                "not the directory of a part (no readable {PART_RECORD}: {e}); write parts with \
+                "not the record of a part ({e}); write parts with \
                  `lidarsim run SURVEY --part K/N -o DIR`"
             ),
         )
@@ -42,6 +83,7 @@ fn read_part(dir: &Path) -> Result<PartRecord, RunError> {
             format!("is not a part's record: {e}"),
         )
     })?;
+    check_counts(&path, &record)?;
     if !record.complete {
         return Err(error(
             dir,
@@ -53,14 +95,15 @@ fn read_part(dir: &Path) -> Result<PartRecord, RunError> {
         ));
     }
     let survey_path = dir.join("survey.toml");
-    let text = std::fs::read_to_string(&survey_path).map_err(|e| {
-        error(
-            &survey_path,
-            e.kind(),
-            format!("cannot read the part's survey: {e}"),
-        )
-    })?;
-    if fnv1a_hex(text.as_bytes()) != record.survey_fnv1a {
+    let text = crate::io::input::read_input(&survey_path, crate::io::input::MAX_SURVEY_BYTES)
+        .map_err(|e| {
+            error(
+                &survey_path,
+                e.kind(),
+                format!("cannot read the part's survey: {e}"),
+            )
+        })?;
+    if fnv1a_hex(&text) != record.survey_fnv1a {
         return Err(error(
             &survey_path,
             io::ErrorKind::InvalidData,
@@ -77,33 +120,75 @@ fn read_part(dir: &Path) -> Result<PartRecord, RunError> {
             ),
         ));
     }
-    let mut files = vec![(record.points_file.as_str(), record.points_bytes)];
+    let mut files = vec![(
+        record.points_file.as_str(),
+        record.points_bytes,
+        &record.points_crc32,
+    )];
     if record.report_bytes > 0 {
-        files.push((super::super::REPORT_STATE, record.report_bytes));
+        files.push((
+            super::super::REPORT_STATE,
+            record.report_bytes,
+            &record.report_crc32,
+        ));
     }
-    for (name, bytes) in files {
-        let file = dir.join(name);
-        let len = std::fs::metadata(&file)
-            .map_err(|e| {
-                error(
-                    &file,
-                    e.kind(),
-                    format!("cannot read the part's {name}: {e}"),
-                )
-            })?
-            .len();
-        if len != bytes {
-            return Err(error(
-                &file,
-                io::ErrorKind::InvalidData,
-                format!(
-                    "holds {len} bytes, but part {}/{} wrote {bytes}: it was cut short or changed",
-                    record.part, record.parts
-                ),
-            ));
-        }
+    for (name, bytes, crc) in files {
+        check_file(&dir.join(name), &record, bytes, crc.as_deref())?;
     }
     Ok(record)
+}
+
+/// Refuses a part's file that is not the one its part wrote: of another
+/// length than `bytes`, or with another checksum than `crc` (a record
+/// without one is of a lidarsim that did not record it).
+fn check_file(
+    file: &Path,
+    record: &PartRecord,
+    bytes: u64,
+    crc: Option<&str>,
+) -> Result<(), RunError> {
+    let (k, n) = (record.part, record.parts);
+    let name = file
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let len = crate::io::input::check_input(file, u64::MAX).map_err(|e| {
+        error(
+            file,
+            e.kind(),
+            format!("cannot read the part's {name}: {e}"),
+        )
+    })?;
+    if len != bytes {
+        return Err(error(
+            file,
+            io::ErrorKind::InvalidData,
+            format!(
+                "holds {len} bytes, but part {k}/{n} wrote {bytes}: it was cut short or changed"
+            ),
+        ));
+    }
+    let Some(crc) = crc else {
+        return Err(error(
+            file,
+            io::ErrorKind::InvalidData,
+            format!(
+                "part {k}/{n} recorded no checksum of it (it was written by an earlier \
+                 lidarsim): run the part again"
+            ),
+        ));
+    };
+    let found = file_crc32(file).map_err(|e| error(file, e.kind(), e.to_string()))?;
+    if found != crc {
+        return Err(error(
+            file,
+            io::ErrorKind::InvalidData,
+            format!(
+                "is not the file part {k}/{n} wrote: its checksum is {found}, the part recorded \
+                 {crc} (it was changed, or swapped with another part's)"
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The refusal of a merge given no part.

@@ -54,6 +54,7 @@ pub fn merge_following(
     follow: &Follow,
     parts_added: &dyn Fn(usize, usize),
 ) -> Result<Summary, RunError> {
+    crate::run::outdir::check_parts(out_dir, part_dirs)?;
     let mut merge = Merge::begin(out_dir, options.overwrite, taken)?;
     // A following merge is the one most likely to end early (a part that
     // failed): it leaves the parts whole, to be merged again.

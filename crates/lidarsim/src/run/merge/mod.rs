@@ -60,9 +60,10 @@ pub enum Parts {
     /// Takes them: the first stitched part's LAS file is moved into the
     /// output rather than copied (on one file system), the other stitched
     /// parts' LAS files are removed once the joined file is checked
-    /// against them (while the rest of the output is written), and every
-    /// part's directory once the merge is complete. A merge that fails
-    /// after the move leaves that file as the output's
+    /// against them (while the rest of the output is written), and, once
+    /// the merge is complete, the files each part wrote (its record lists
+    /// them) and its directory if nothing else is left in it. A merge that
+    /// fails after the move leaves that file as the output's
     /// `points.las.partial`, and its parts must be run again.
     Take,
 }
@@ -98,6 +99,7 @@ pub fn merge_over(
     taken: Parts,
     built: Option<(&Survey, &World)>,
 ) -> Result<Summary, RunError> {
+    outdir::check_parts(out_dir, part_dirs)?;
     let mut gathered = Gathered::default();
     for dir in part_dirs {
         gathered.admit(dir)?;
@@ -163,6 +165,7 @@ impl Merge {
     /// joined fails the merge.
     pub fn add(&mut self, dir: &Path) -> Result<(), RunError> {
         self.check_usable()?;
+        outdir::check_parts(&self.out_dir, &[dir.to_path_buf()])?;
         let first_part = self.gathered.first.is_none();
         self.gathered.admit(dir)?;
         let taken_in = self.take_in(first_part);
@@ -337,6 +340,8 @@ impl Merge {
                 Source::Parts {
                     parts: &inputs,
                     joined,
+                    keep: (move_first && with_report)
+                        .then(|| crate::output::AtomicFile::partial_of(&las_path)),
                 },
             );
             let removed =
@@ -346,12 +351,48 @@ impl Merge {
         let summary = summary?;
         removed?;
         if taken == Parts::Take {
-            for (dir, _) in &parts {
-                std::fs::remove_dir_all(dir).map_err(|e| not_removed(dir, e))?;
+            for (dir, record) in &parts {
+                let kept = remove_part(dir, record)?;
+                if let (false, Some(warn)) = (kept.is_empty(), options.on_warning) {
+                    warn(&format!(
+                        "{}: kept the part's directory, without the files the part wrote: it \
+                         holds files lidarsim did not write ({})",
+                        dir.display(),
+                        kept.join(", ")
+                    ));
+                }
             }
         }
         Ok(summary)
     }
+}
+
+/// Removes what the part in `dir` wrote (its record's [`files`], checked
+/// at admission to be names a part writes), then the directory if that
+/// leaves it empty; returns the names of what else it holds, which stay.
+///
+/// [`files`]: super::part::PartRecord::files
+fn remove_part(dir: &Path, record: &super::part::PartRecord) -> Result<Vec<String>, RunError> {
+    for name in record.written() {
+        let path = dir.join(&name);
+        match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != io::ErrorKind::NotFound => return Err(not_removed(&path, e)),
+            _ => {}
+        }
+    }
+    let data = dir.join(outdir::DATA_DIR);
+    if std::fs::read_dir(&data).is_ok_and(|mut d| d.next().is_none()) {
+        std::fs::remove_dir(&data).map_err(|e| not_removed(&data, e))?;
+    }
+    let mut left: Vec<String> = std::fs::read_dir(dir)
+        .map_err(|e| not_removed(dir, e))?
+        .filter_map(|e| Some(e.ok()?.file_name().to_string_lossy().into_owned()))
+        .collect();
+    if left.is_empty() {
+        std::fs::remove_dir(dir).map_err(|e| not_removed(dir, e))?;
+    }
+    left.sort();
+    Ok(left)
 }
 
 /// Removes the point files of `parts`, joined already (a file moved into

@@ -61,9 +61,11 @@ impl Risley {
     }
 
     /// The rate at which the rosette's lobes pass a fixed azimuth,
-    /// `|f_1 − f_2|`, Hz.
+    /// `|f_1 − f_2|`, Hz; rotors turning together trace a circle, which
+    /// passes at their rate (as a Palmer scanner's does).
     pub fn lobe_rate_hz(&self) -> f64 {
         match self.prisms.as_slice() {
+            [a, b, ..] if a.frequency_hz == b.frequency_hz => a.frequency_hz.abs(),
             [a, b, ..] => (a.frequency_hz - b.frequency_hz).abs(),
             [a] => a.frequency_hz.abs(),
             [] => 0.0,

@@ -10,6 +10,31 @@ use crate::survey::raw::RawScanner;
 /// Widest divergence accepted, mrad.
 const MAX_DIVERGENCE_MRAD: f64 = 100.0;
 
+/// Narrowest divergence above 0 accepted, mrad: 1 µrad, below the
+/// diffraction limit `λ/(π·w₀)` of any airborne scanner's beam (3.4 µrad
+/// at 1064 nm from a 10 cm waist). 0 is an ideal pencil beam.
+const MIN_DIVERGENCE_MRAD: f64 = 1e-3;
+
+/// Most an elliptical beam's two divergences may differ, as a ratio: the
+/// flattest beams of laser diodes are about 10 to 1 (Livox Mid-70, 0.28°
+/// by 0.03°).
+const MAX_ELLIPTICITY: f64 = 100.0;
+
+/// Refuses a divergence above 0 but narrower than [`MIN_DIVERGENCE_MRAD`].
+fn check_narrowest(c: &mut Checker, key: KeyPath, mrad: f64) {
+    if mrad > 0.0 && mrad < MIN_DIVERGENCE_MRAD {
+        c.err(
+            key,
+            format!(
+                "must be 0 (a pencil beam) or at least {MIN_DIVERGENCE_MRAD} mrad, got {}: no \
+                 laser beam diverges less than its diffraction limit (3.4 µrad at 1064 nm from a \
+                 10 cm waist)",
+                crate::message::num(mrad)
+            ),
+        );
+    }
+}
+
 /// The full divergence across and along the track, mrad, from the keys
 /// `divergence_mrad` and `divergence_along_mrad` of `path` (defaults:
 /// `default`, and the across value for along).
@@ -48,9 +73,27 @@ pub(crate) fn divergence(
                     "an elliptical beam needs divergence_mrad (across) above 0 as well",
                 );
             }
+            let ratio = (v / across_mrad).max(across_mrad / v);
+            if across_mrad > 0.0 && v > 0.0 && ratio > MAX_ELLIPTICITY {
+                c.err(
+                    path.key("divergence_along_mrad"),
+                    format!(
+                        "is {} times divergence_mrad ({} mrad against {} mrad); an elliptical \
+                         beam's two divergences may differ at most {MAX_ELLIPTICITY} times \
+                         (laser diodes' beams differ about 10 times)",
+                        crate::message::num((ratio * 10.0).round() / 10.0),
+                        crate::message::num(v),
+                        crate::message::num(across_mrad)
+                    ),
+                );
+            }
             v
         }
     };
+    check_narrowest(c, path.key("divergence_mrad"), across_mrad);
+    if along.is_some() {
+        check_narrowest(c, path.key("divergence_along_mrad"), along_mrad);
+    }
     (across_mrad, along_mrad)
 }
 

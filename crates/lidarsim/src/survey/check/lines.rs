@@ -53,8 +53,10 @@ pub(crate) fn lines(
             c.err(
                 lp.key("end_m"),
                 format!(
-                    "the line would take {hours:.3e} h at {speed} m/s; a flight line may \
-                     take at most {MAX_LINE_HOURS} h"
+                    "the line would take {} h at {} m/s; a flight line may take at most \
+                     {MAX_LINE_HOURS} h",
+                    crate::message::fixed(hours, 1),
+                    crate::message::num(speed)
                 ),
             );
             continue;

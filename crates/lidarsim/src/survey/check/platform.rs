@@ -101,7 +101,7 @@ pub(crate) fn platform(c: &mut Checker, raw: &RawSurvey) -> Platform {
         30.0,
         0.0,
         false,
-        f64::INFINITY,
+        1e7,
         " s",
     );
     let drift = match &p.drift_m {

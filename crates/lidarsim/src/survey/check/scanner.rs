@@ -148,7 +148,10 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
     if max_range_m <= min_range_m {
         c.err(
             sp.key("max_range_m"),
-            format!("must be greater than min_range_m ({min_range_m} m)"),
+            format!(
+                "must be greater than min_range_m ({} m)",
+                crate::message::num(min_range_m)
+            ),
         );
     }
     let reference_range_m = c.number(
