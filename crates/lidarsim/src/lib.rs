@@ -80,11 +80,13 @@ pub mod render;
 pub mod report;
 pub mod rng;
 pub mod run;
+pub mod scan;
 pub mod scene;
 pub mod sensor;
 pub mod sim;
 pub mod summary;
 pub mod survey;
+pub mod twin;
 pub mod waveform;
 pub mod world;
 
