@@ -42,6 +42,10 @@ pub enum Command {
     /// DIR/survey.toml with the files it uses and twin.json (what was
     /// read and how sure it is).
     Twin(TwinArgs),
+    /// Compare two point clouds (LAS, LAZ, or a run's directory) with the
+    /// field's metrics over their common area, overall and per grid cell:
+    /// a table, and DIR/compare.json and DIR/compare.html with -o DIR.
+    Compare(CompareArgs),
 }
 
 /// The options of `lidarsim twin`.
@@ -95,6 +99,41 @@ pub struct TwinArgs {
     pub chm_cell_m: Option<f64>,
     /// Write into a non-empty directory no twin wrote, replacing only the
     /// twin's files there.
+    #[arg(long)]
+    pub overwrite: bool,
+}
+
+/// The options of `lidarsim compare`.
+#[derive(Args)]
+pub struct CompareArgs {
+    /// The first cloud (LAS or LAZ, or a run's output directory), e.g. the
+    /// real scan.
+    pub a: PathBuf,
+    /// The second cloud, e.g. the simulation.
+    pub b: PathBuf,
+    /// Directory for compare.json and compare.html (default: only the
+    /// table).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Compare only within XMIN,YMIN,XMAX,YMAX (m, the clouds'
+    /// coordinates).
+    #[arg(long, value_name = "XMIN,YMIN,XMAX,YMAX", allow_hyphen_values = true)]
+    pub area: Option<String>,
+    /// Edge of the grid cells of the per-cell metrics, m.
+    #[arg(long, default_value_t = 20.0)]
+    pub cell_m: f64,
+    /// Thin the cloud of more pulses per m² to the other's pulse density
+    /// first (keeping all returns of a kept pulse).
+    #[arg(long)]
+    pub match_density: bool,
+    /// Seed of the thinning's choice of pulses.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Names of the two clouds in the table and the page.
+    #[arg(long, value_name = "A,B")]
+    pub labels: Option<String>,
+    /// Write into a non-empty directory, replacing only compare.json and
+    /// compare.html.
     #[arg(long)]
     pub overwrite: bool,
 }

@@ -5,7 +5,7 @@
 //! and reports errors with a non-zero exit status (2 for a bad survey, 1
 //! for a failed run). Each command has its module: [`simulate`] (`demo`
 //! and `run`, with [`summary`] printing a finished run), [`check`],
-//! [`waveform`], [`render`], [`mod@bench`] and [`twin`];
+//! [`waveform`], [`render`], [`mod@bench`], [`twin`] and [`compare`];
 //! [`console`] holds how the program prints (and the progress of long
 //! steps), [`cpu`] the processor check.
 
@@ -19,6 +19,7 @@ mod console;
 mod args;
 mod bench;
 mod check;
+mod compare;
 mod cpu;
 mod parts;
 mod render;
@@ -64,5 +65,6 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::command(args),
         Command::Merge(args) => parts::merge(args),
         Command::Twin(args) => twin::command(args),
+        Command::Compare(args) => compare::command(args),
     }
 }

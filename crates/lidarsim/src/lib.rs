@@ -65,6 +65,7 @@
 pub mod accel;
 pub mod budget;
 pub mod canopy;
+pub mod compare;
 pub mod demo;
 pub mod detection;
 pub mod files;
@@ -74,6 +75,7 @@ pub mod kernels;
 pub mod memory;
 pub mod message;
 pub mod output;
+pub mod owned;
 pub mod plan;
 pub mod radiometry;
 pub mod render;

@@ -210,6 +210,48 @@ impl Grid {
     }
 }
 
+/// Points sorted by cell: `order[start[i]..start[i + 1]]` are the points
+/// of cell `i`.
+pub struct CellIndex {
+    /// The grid.
+    pub grid: Grid,
+    /// Point indices, cell by cell.
+    pub order: Vec<u32>,
+    /// Where each cell's points start in `order` (one more entry than
+    /// cells).
+    pub start: Vec<u32>,
+}
+
+impl CellIndex {
+    /// The points `keep` accepts, by cell of `grid` (a counting sort).
+    pub fn new(grid: Grid, x: &[f64], y: &[f64], keep: impl Fn(usize) -> bool) -> Self {
+        let cell: Vec<Option<usize>> = (0..x.len())
+            .map(|k| keep(k).then(|| grid.cell_of(x[k], y[k])).flatten())
+            .collect();
+        let mut start = vec![0u32; grid.values.len() + 1];
+        for &c in cell.iter().flatten() {
+            start[c + 1] += 1;
+        }
+        for i in 0..grid.values.len() {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut order = vec![0u32; start[grid.values.len()] as usize];
+        for (k, c) in cell.iter().enumerate() {
+            if let Some(c) = *c {
+                order[fill[c] as usize] = k as u32;
+                fill[c] += 1;
+            }
+        }
+        Self { grid, order, start }
+    }
+
+    /// The points of cell `i`.
+    pub fn points(&self, i: usize) -> &[u32] {
+        &self.order[self.start[i] as usize..self.start[i + 1] as usize]
+    }
+}
+
 /// The eight neighbours of a cell, as (column, row) steps.
 pub const NEIGHBOURS: [(isize, isize); 8] = [
     (-1, -1),

@@ -5,10 +5,10 @@
 //! is a `[[polygon]]` instead) and `twin.json` (what was inferred and how
 //! sure it is).
 //!
-//! The directory must be new, empty or one a twin wrote (it holds
-//! [`MARKER`]); any other is refused unless `overwrite`, which replaces
-//! only the twin's own files. Every file is written as `NAME.partial` and
-//! renamed when whole; the marker comes last.
+//! The directory must be new, empty or one a twin wrote (it holds [`OWN`]'s
+//! marker); any other is refused unless `overwrite`, which replaces only
+//! the twin's own files ([`crate::owned`]). Every file is written as
+//! `NAME.partial` and renamed when whole; the marker comes last.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -18,6 +18,7 @@ use serde::Serialize;
 use super::acquisition::combine::{Deflector, Flight};
 use super::{Twin, TwinError};
 use crate::output::AtomicFile;
+use crate::owned::OwnFiles;
 use crate::survey::raw::{
     RawFlightLine, RawMaterial, RawOutput, RawPlan, RawPolygon, RawScanner, RawSurvey, RawTerrain,
     RawTreeTable,
@@ -26,8 +27,12 @@ use crate::survey::raw::{
 /// The files a twin writes.
 pub const TWIN_FILES: [&str; 4] = ["survey.toml", "trees.csv", "dtm.tif", "twin.json"];
 
-/// The file that marks a directory as one a twin wrote.
-pub const MARKER: &str = ".lidarsim-twin";
+/// The files a twin writes and the marker of its directory.
+pub const OWN: OwnFiles = OwnFiles {
+    command: "twin",
+    files: &TWIN_FILES,
+    marker: ".lidarsim-twin",
+};
 
 /// Reflectance of the ground at 1064 nm (forest floor, litter and soil:
 /// the value of the validation's ground, `docs/validation.md`).
@@ -89,7 +94,8 @@ pub fn origin_of(twin: &Twin) -> [f64; 3] {
 
 /// Writes `twin`'s files into `dir`; returns the survey's path.
 pub fn write_twin(twin: &Twin, dir: &Path, overwrite: bool) -> Result<PathBuf, TwinError> {
-    claim(dir, overwrite)?;
+    let failed = |(path, source)| TwinError::Write { path, source };
+    OWN.claim(dir, overwrite).map_err(failed)?;
     let origin = origin_of(twin);
     let flat = twin.ground.flat;
     let survey = survey_text(twin, origin)?;
@@ -105,10 +111,7 @@ pub fn write_twin(twin: &Twin, dir: &Path, overwrite: bool) -> Result<PathBuf, T
     write(&dir.join("trees.csv"), trees_csv(twin).as_bytes())?;
     write(&survey_path, survey.as_bytes())?;
     write(&dir.join("twin.json"), report_json(twin, origin).as_bytes())?;
-    write(
-        &dir.join(MARKER),
-        b"lidarsim twin wrote this directory; a new twin replaces only its own files.\n",
-    )?;
+    OWN.mark(dir).map_err(failed)?;
     Ok(survey_path)
 }
 
@@ -118,71 +121,6 @@ fn write(path: &Path, bytes: &[u8]) -> Result<(), TwinError> {
         path: path.to_path_buf(),
         source,
     })
-}
-
-/// Makes `dir` ready: created if missing; refused if it holds anything but
-/// a twin's files unless a twin wrote it or `overwrite`; the twin's files
-/// of an earlier twin removed.
-fn claim(dir: &Path, overwrite: bool) -> Result<(), TwinError> {
-    let fail = |source: std::io::Error| TwinError::Write {
-        path: dir.to_path_buf(),
-        source,
-    };
-    if dir.exists() && !dir.is_dir() {
-        return Err(fail(std::io::Error::new(
-            std::io::ErrorKind::AlreadyExists,
-            "is not a directory: choose a directory for the twin",
-        )));
-    }
-    std::fs::create_dir_all(dir).map_err(fail)?;
-    let ours = |name: &str| {
-        let base = name.strip_suffix(".partial").unwrap_or(name);
-        name == MARKER || TWIN_FILES.contains(&base)
-    };
-    let mut foreign = Vec::new();
-    let mut own = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(fail)? {
-        let entry = entry.map_err(fail)?;
-        let name = entry.file_name().to_string_lossy().into_owned();
-        if ours(&name) {
-            own.push(entry.path());
-        } else {
-            foreign.push(name);
-        }
-    }
-    if !foreign.is_empty() && !dir.join(MARKER).exists() && !overwrite {
-        foreign.sort();
-        let shown = foreign
-            .iter()
-            .take(5)
-            .cloned()
-            .collect::<Vec<_>>()
-            .join(", ");
-        return Err(fail(std::io::Error::new(
-            std::io::ErrorKind::AlreadyExists,
-            format!(
-                "the directory is not empty and no twin wrote it (it holds {shown}{}): choose a \
-                 new or empty directory, or pass --overwrite to replace only the twin's files \
-                 ({}) and keep the rest",
-                if foreign.len() > 5 { " and more" } else { "" },
-                TWIN_FILES.join(", ")
-            ),
-        )));
-    }
-    for path in own {
-        if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir()) {
-            return Err(TwinError::Write {
-                path,
-                source: std::io::Error::new(
-                    std::io::ErrorKind::AlreadyExists,
-                    "is a directory where the twin writes a file: move it away",
-                ),
-            });
-        }
-        // A symbolic link is removed itself, never what it points to.
-        std::fs::remove_file(&path).map_err(|source| TwinError::Write { path, source })?;
-    }
-    Ok(())
 }
 
 /// `survey.toml`.

@@ -20,7 +20,7 @@
 
 use rayon::prelude::*;
 
-use crate::scan::grid::Grid;
+use crate::scan::grid::{CellIndex, Grid};
 
 /// Segments more than this far from their top are cut (silva2016's
 /// `max_cr_factor`): the crown radius at most this times the height.
@@ -118,7 +118,7 @@ fn nearest_tops(chm: &Grid, tops: &[Top], min_height_m: f64) -> Vec<Option<(usiz
     buckets.values.iter_mut().for_each(|v| *v = 0.0);
     let xs: Vec<f64> = tops.iter().map(|t| t.x_m).collect();
     let ys: Vec<f64> = tops.iter().map(|t| t.y_m).collect();
-    let index = super::tops::CellIndex::new(buckets, &xs, &ys, |_| true);
+    let index = CellIndex::new(buckets, &xs, &ys, |_| true);
     let rings = (reach / bucket_m).ceil() as isize + 1;
     (0..chm.values.len())
         .into_par_iter()
