@@ -277,7 +277,7 @@ fn trees_csv(twin: &Twin) -> String {
     let mut out = format!(
         "# The trees of the twin of {}: tops where no return within half a window of\n# \
          {} + {}·h + {}·h² m is higher (lidR's lmf), crowns from the canopy height model\n# \
-         (silva2016), radius of the disc holding {} % of a crown's cells, crown base the\n# 10th \
+         (silva2016), radius of the disc holding {} % of a crown's cells, crown base the\n# 5th \
          percentile of its returns' heights. Edit freely: see docs/survey.md, [[tree_table]].\n\
          id,x_m,y_m,z_m,height_m,crown_base_m,crown_radius_m,dbh_m\n",
         twin.scan.file,

@@ -171,7 +171,7 @@ fn twin_tree(
     }
 }
 
-/// Each tree's crown base: the 10th percentile of the heights of the
+/// Each tree's crown base: the 5th percentile of the heights of the
 /// returns in its segment's cells above both 2 m and [`EXCLUSION`] times
 /// its height (understorey below is not its crown), between 5 % and 90 %
 /// of its height; the species' live crown ratio when its segment holds
@@ -210,8 +210,8 @@ fn crown_bases(
                 return tall * (1.0 - species.preset().crown_ratio);
             }
             hs.sort_by(f32::total_cmp);
-            let p10 = f64::from(hs[(hs.len() - 1) / 10]);
-            p10.clamp(0.05 * tall, 0.9 * tall)
+            let p5 = f64::from(hs[(hs.len() - 1) / 20]);
+            p5.clamp(0.05 * tall, 0.9 * tall)
         })
         .collect()
 }
@@ -267,7 +267,7 @@ fn report(
             .iter()
             .map(|t| 1.0 - t.crown_base_m / t.height_m)
             .collect()),
-        crown_base: "10th percentile of the heights of the returns in the crown's cells above \
+        crown_base: "5th percentile of the heights of the returns in the crown's cells above \
                      2 m and 0.3 × the tree's height; the species' live crown ratio with fewer \
                      than 10 such returns"
             .into(),
