@@ -35,7 +35,8 @@ impl CommonArea {
     }
 }
 
-/// The common area of `a` and `b` within `rect` (if given), on fine cells
+/// The common area of `a` and `b` within `rect` (if given, `[xmin, ymin,
+/// xmax, ymax]`, the maxima excluded), on fine cells
 /// of about 50 first returns of the sparser cloud and comparison cells of
 /// `cell_m`. `None` when they share no area.
 pub fn common_area(
@@ -62,10 +63,12 @@ pub fn common_area(
     if !(bounds[2] > bounds[0] && bounds[3] > bounds[1]) {
         return None;
     }
+    // Half-open, [xmin, xmax) × [ymin, ymax): a cell beyond the rectangle
+    // holds no point of it.
     let inside = |c: &ScanCloud, k: usize| {
         c.is_first(k)
-            && (bounds[0]..=bounds[2]).contains(&c.x[k])
-            && (bounds[1]..=bounds[3]).contains(&c.y[k])
+            && (bounds[0]..bounds[2]).contains(&c.x[k])
+            && (bounds[1]..bounds[3]).contains(&c.y[k])
     };
     let area = (bounds[2] - bounds[0]) * (bounds[3] - bounds[1]);
     let density = |c: &ScanCloud| (0..c.len()).filter(|&k| inside(c, k)).count() as f64 / area;
