@@ -190,6 +190,12 @@ fn check_trees(all: &[Truth], made: &lidarsim::twin::Twin) {
         })
         .collect();
     let matched = errors.len() as f64 / core.len() as f64;
+    // The figures docs/validation.md quotes (`-- --nocapture`).
+    eprintln!(
+        "trees: {found} found, {in_tile} in the tile not overtopped; {} of {} core trees matched",
+        errors.len(),
+        core.len()
+    );
     assert!(
         matched >= 0.85,
         "{} of {} core trees matched",
@@ -209,6 +215,10 @@ fn check_trees(all: &[Truth], made: &lidarsim::twin::Twin) {
         "crown radius over the true one: median {median}"
     );
     let base = errors.iter().map(|e| e[2]).sum::<f64>() / errors.len() as f64;
+    eprintln!(
+        "height bias {bias:.2} m, RMS {rms:.2} m; crown radius median {median:.2} of the truth; \
+         crown base bias {base:.2} m"
+    );
     assert!((-1.0..=1.5).contains(&base), "crown base bias {base} m");
 }
 
@@ -249,6 +259,24 @@ fn check_acquisition(real: &ScanCloud, made: &lidarsim::twin::Twin) {
         );
     }
     let sc = &a.scanner;
+    eprintln!(
+        "acquisition: {:?}; {} Hz, ±{} deg, PRF {} Hz; spacing {:?}",
+        a.strips
+            .iter()
+            .map(|s| s.track.as_ref().map(|t| (
+                t.heading_deg.round(),
+                (t.speed_mps * 10.0).round() / 10.0,
+                t.height_m.round()
+            )))
+            .collect::<Vec<_>>(),
+        sc.scan_frequency_hz.value,
+        sc.scan_angle_deg.value,
+        sc.prf_hz.value.round(),
+        a.line_spacing
+            .iter()
+            .map(|s| s.distance_m)
+            .collect::<Vec<_>>()
+    );
     assert_eq!(sc.deflector, Deflector::Oscillating);
     assert!(
         (sc.scan_frequency_hz.value / 40.0 - 1.0).abs() < 0.01,
@@ -290,6 +318,7 @@ fn check_metrics(real: &ScanCloud, twin: &ScanCloud) {
     };
     let c = compare(real, twin, &options).unwrap();
     let report = lidarsim::compare::table::text(&c);
+    eprintln!("{report}");
     assert!(c.cells.metrics[0].pairs >= 30, "{report}");
     for key in [
         "pulse_density_per_m2",
