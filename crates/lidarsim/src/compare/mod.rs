@@ -144,6 +144,7 @@ pub fn compare(
             why: format!("must be from 1 to 10000 m, got {}", options.cell_m),
         });
     }
+    let (a, b) = (&*a.without_noise(), &*b.without_noise());
     let area = area::common_area(a, b, options.area, options.cell_m).ok_or_else(|| {
         let words = |c: &ScanCloud| {
             let b = c.bounds();

@@ -150,6 +150,45 @@ impl ScanCloud {
     }
 }
 
+/// ASPRS classes of noise (LAS 1.4 R15, Table 17: 7 low point, 18 high
+/// noise): left out of twins and comparisons.
+pub const NOISE_CLASSES: [u8; 2] = [7, 18];
+
+impl ScanCloud {
+    /// The points `keep` accepts, in order (the same cloud otherwise).
+    pub fn retain(&self, keep: impl Fn(usize) -> bool) -> ScanCloud {
+        let idx: Vec<usize> = (0..self.len()).filter(|&k| keep(k)).collect();
+        fn pick<T: Copy>(v: &[T], idx: &[usize]) -> Vec<T> {
+            idx.iter().map(|&k| v[k]).collect()
+        }
+        ScanCloud {
+            name: self.name.clone(),
+            x: pick(&self.x, &idx),
+            y: pick(&self.y, &idx),
+            z: pick(&self.z, &idx),
+            intensity: pick(&self.intensity, &idx),
+            return_number: pick(&self.return_number, &idx),
+            number_of_returns: pick(&self.number_of_returns, &idx),
+            classification: pick(&self.classification, &idx),
+            gps_time: pick(&self.gps_time, &idx),
+            scan_angle_deg: pick(&self.scan_angle_deg, &idx),
+            point_source_id: pick(&self.point_source_id, &idx),
+            facts: self.facts.clone(),
+        }
+    }
+
+    /// The cloud without its noise points ([`NOISE_CLASSES`]), copied only
+    /// when it has some.
+    pub fn without_noise(&self) -> std::borrow::Cow<'_, ScanCloud> {
+        let noise = |k: usize| NOISE_CLASSES.contains(&self.classification[k]);
+        if (0..self.len()).any(noise) {
+            std::borrow::Cow::Owned(self.retain(|k| !noise(k)))
+        } else {
+            std::borrow::Cow::Borrowed(self)
+        }
+    }
+}
+
 /// How a long step reports progress: the step's name and the share done
 /// (0 to 1).
 pub type Progress<'a> = &'a (dyn Fn(&str, f64) + Sync);

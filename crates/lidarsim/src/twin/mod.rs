@@ -156,6 +156,8 @@ pub struct Twin {
     pub area: Grid,
     /// Facts of the scan, for the report.
     pub scan: ScanSummary,
+    /// The scan's CRS as WKT, when its file has one.
+    pub scan_wkt: Option<String>,
     /// The options it was made with.
     pub options: TwinOptions,
 }
@@ -200,8 +202,10 @@ pub fn twin(
         },
         cell_m,
     };
+    let cloud = &*cloud.without_noise();
     let ground = ground_model(cloud).ok_or_else(|| too_large(0.5))?;
-    let h = ground.heights(cloud);
+    let (kept, h) = &without_outliers(cloud, &ground);
+    let cloud = kept.as_ref().unwrap_or(cloud);
     let first = |k: usize| cloud.is_first(k);
     let overall =
         crate::scan::density::density((&cloud.x, &cloud.y), first).ok_or_else(|| too_large(0.5))?;
@@ -213,7 +217,7 @@ pub fn twin(
     )
     .ok_or_else(|| too_large(overall.cell_m))?;
     progress("trees", 0.2);
-    let (trees, tree_report) = trees::detect_trees(cloud, &h, &ground, &area, &options.trees);
+    let (trees, tree_report) = trees::detect_trees(cloud, h, &ground, &area, &options.trees);
     progress("acquisition", 0.7);
     let b = cloud.bounds();
     let centre = [(b[0] + b[2]) / 2.0, (b[1] + b[3]) / 2.0];
@@ -229,7 +233,7 @@ pub fn twin(
             .fold(0.0f64, |m, &a| m.max(f64::from(a).abs())),
     };
     let acquisition = if strips_readable {
-        let strips = acquisition::read_strips(cloud, &h);
+        let strips = acquisition::read_strips(cloud, h);
         if strips.is_empty() {
             let first: Vec<usize> = (0..cloud.len()).filter(|&k| cloud.is_first(k)).collect();
             return Err(TwinError::NoStrips {
@@ -271,8 +275,28 @@ pub fn twin(
                 .or_else(|| cloud.facts.wkt.as_ref().map(|_| "WKT".to_string())),
         },
         area,
+        scan_wkt: cloud.facts.wkt.clone(),
         options: options.clone(),
     })
+}
+
+/// Tallest tree a survey takes, m (`[[tree]] height_m`).
+const MAX_TREE_HEIGHT_M: f64 = 150.0;
+
+/// `cloud` without the points no tree or ground can be (`None` when it
+/// has none): more than 5 m below the ground, or above the 99.99th
+/// percentile of the heights plus 10 m or 150 m (birds, clouds, multipath
+/// echoes that no noise class marks); and every point's height.
+fn without_outliers(cloud: &ScanCloud, ground: &GroundModel) -> (Option<ScanCloud>, Vec<f64>) {
+    let h = ground.heights(cloud);
+    let [top] = trees::percentiles(h.clone(), [0.9999]);
+    let ceiling = (top + 10.0).min(MAX_TREE_HEIGHT_M);
+    if h.iter().all(|&v| (-5.0..=ceiling).contains(&v)) {
+        return (None, h);
+    }
+    let kept = cloud.retain(|k| (-5.0..=ceiling).contains(&h[k]));
+    let h = ground.heights(&kept);
+    (Some(kept), h)
 }
 
 /// Refuses options out of range, naming the option.
@@ -321,4 +345,43 @@ fn check_options(options: &TwinOptions) -> Result<(), TwinError> {
         });
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bird 300 m up (unclassified) and a noise point (class 7) leave
+    /// the canopy as it is: no tree or ground is made of them.
+    #[test]
+    fn noise_and_outliers_are_left_out() {
+        let mut c = ScanCloud::default();
+        for i in 0..40_000 {
+            let (x, y) = ((i % 200) as f64 * 0.5, (i / 200) as f64 * 0.5);
+            let canopy = (x / 5.0).round() as i64 % 2 == 0;
+            c.x.push(x);
+            c.y.push(y);
+            c.z.push(if canopy { 20.0 } else { 0.0 });
+            c.classification.push(if canopy { 5 } else { 2 });
+        }
+        for (z, class) in [(300.0, 1), (-40.0, 7), (250.0, 18)] {
+            c.x.push(50.0);
+            c.y.push(50.0);
+            c.z.push(z);
+            c.classification.push(class);
+        }
+        let n = c.len();
+        c.intensity = vec![0; n];
+        c.return_number = vec![1; n];
+        c.number_of_returns = vec![1; n];
+        c.gps_time = vec![0.0; n];
+        c.scan_angle_deg = vec![0.0; n];
+        c.point_source_id = vec![0; n];
+        let clean = c.without_noise();
+        assert_eq!(clean.len(), c.len() - 2);
+        let ground = ground_model(&clean).unwrap();
+        let (kept, h) = without_outliers(&clean, &ground);
+        assert_eq!(kept.unwrap().len(), c.len() - 3);
+        assert!(h.iter().all(|&v| (-0.5..=20.5).contains(&v)));
+    }
 }

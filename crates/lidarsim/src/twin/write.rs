@@ -251,21 +251,26 @@ fn scanner(twin: &Twin) -> RawScanner {
     raw
 }
 
-/// `[output]`: LAS in the scan's coordinates and CRS.
+/// `[output]`: LAS in the scan's coordinates and CRS: its EPSG code when
+/// the LAS writer knows it, else its WKT when the file has one.
 fn output(twin: &Twin, origin: [f64; 3]) -> RawOutput {
+    use crate::output::crs::{check_wkt, wkt_for_epsg};
     let crs = twin
         .scan
         .crs
         .as_deref()
-        .filter(|c| {
-            crate::output::crs::parse_epsg(c)
-                .is_some_and(|e| crate::output::crs::wkt_for_epsg(e).is_some())
-        })
-        .map(str::to_string);
+        .and_then(crate::output::crs::parse_epsg)
+        .filter(|&e| wkt_for_epsg(e).is_some())
+        .map(|e| format!("EPSG:{e}"));
+    let crs_wkt = match (&crs, &twin.scan_wkt) {
+        (None, Some(w)) if check_wkt(w).is_ok() => Some(w.clone()),
+        _ => None,
+    };
     RawOutput {
         formats: Some(vec!["las".into()]),
         offset_m: Some(origin.to_vec()),
         crs,
+        crs_wkt,
         ..RawOutput::default()
     }
 }
