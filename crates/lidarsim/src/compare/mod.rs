@@ -172,21 +172,11 @@ pub fn compare(
             .collect()
     };
     let (mut keep_a, mut keep_b) = (inside(a), inside(b));
-    let mut kept = [1.0, 1.0];
-    if options.match_density {
-        let pulses = |c: &ScanCloud, keep: &[bool]| {
-            (0..c.len()).filter(|&k| keep[k] && c.is_first(k)).count() as f64
-        };
-        let (na, nb) = (pulses(a, &keep_a), pulses(b, &keep_b));
-        let (dense, keep, share, slot) = if na > nb {
-            (a, &mut keep_a, nb / na, 0)
-        } else {
-            (b, &mut keep_b, na / nb.max(1.0), 1)
-        };
-        let thinned = thin::thin_by_pulse(dense, share, options.seed);
-        keep.iter_mut().zip(thinned).for_each(|(k, t)| *k &= t);
-        kept[slot] = share;
-    }
+    let kept = if options.match_density {
+        match_density((a, &mut keep_a), (b, &mut keep_b), options.seed)
+    } else {
+        [1.0, 1.0]
+    };
     let idx = |keep: &[bool]| (0..keep.len()).filter(|&k| keep[k]).collect::<Vec<usize>>();
     let (ia, ib) = (idx(&keep_a), idx(&keep_b));
     let values = [
@@ -234,6 +224,30 @@ pub fn compare(
         notes,
         values,
     })
+}
+
+/// Thins the cloud of more pulses (first returns among the points its
+/// `keep` accepts) to the other's by pulse; returns the share of each
+/// cloud's pulses kept.
+fn match_density(
+    (a, keep_a): (&ScanCloud, &mut [bool]),
+    (b, keep_b): (&ScanCloud, &mut [bool]),
+    seed: u64,
+) -> [f64; 2] {
+    let pulses = |c: &ScanCloud, keep: &[bool]| {
+        (0..c.len()).filter(|&k| keep[k] && c.is_first(k)).count() as f64
+    };
+    let (na, nb) = (pulses(a, keep_a), pulses(b, keep_b));
+    let (dense, keep, share, slot) = if na > nb {
+        (a, keep_a, nb / na, 0)
+    } else {
+        (b, keep_b, na / nb.max(1.0), 1)
+    };
+    let thinned = thin::thin_by_pulse(dense, share, seed);
+    keep.iter_mut().zip(thinned).for_each(|(k, t)| *k &= t);
+    let mut kept = [1.0, 1.0];
+    kept[slot] = share;
+    kept
 }
 
 /// B − A of each metric.

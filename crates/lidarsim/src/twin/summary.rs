@@ -22,6 +22,31 @@ fn est(e: &Estimate, digits: i32, unit: &str) -> String {
     format!("{}{unit} ({}{range})", r(e.value, digits), e.source)
 }
 
+/// One strip in a line.
+fn strip_line(strip: &super::acquisition::StripReport) -> String {
+    let track = strip.track.as_ref().map_or_else(
+        || strip.track_problem.clone().unwrap_or_default(),
+        |tr| {
+            format!(
+                "heading {} deg, {} m/s, {} ± {} m above ground",
+                r(tr.heading_deg, 0),
+                r(tr.speed_mps, 1),
+                r(tr.height_m, 0),
+                r(tr.height_se_m, 0)
+            )
+        },
+    );
+    format!(
+        "strip {}: {} first returns over {} s, angles {}…{} deg, {} per m²; {track}",
+        strip.strip,
+        strip.first_returns,
+        r(strip.duration_s, 2),
+        r(strip.scan_angle_deg[0], 1),
+        r(strip.scan_angle_deg[1], 1),
+        r(strip.pulse_density_per_m2, 2),
+    )
+}
+
 impl Twin {
     /// The twin in lines of text.
     pub fn summary_lines(&self) -> Vec<String> {
@@ -65,29 +90,7 @@ impl Twin {
                 r(100.0 * t.crowns_cover_of_gaps, 0),
             ),
         ];
-        for strip in &a.strips {
-            let track = strip.track.as_ref().map_or_else(
-                || strip.track_problem.clone().unwrap_or_default(),
-                |tr| {
-                    format!(
-                        "heading {} deg, {} m/s, {} ± {} m above ground",
-                        r(tr.heading_deg, 0),
-                        r(tr.speed_mps, 1),
-                        r(tr.height_m, 0),
-                        r(tr.height_se_m, 0)
-                    )
-                },
-            );
-            out.push(format!(
-                "strip {}: {} first returns over {} s, angles {}…{} deg, {} per m²; {track}",
-                strip.strip,
-                strip.first_returns,
-                r(strip.duration_s, 2),
-                r(strip.scan_angle_deg[0], 1),
-                r(strip.scan_angle_deg[1], 1),
-                r(strip.pulse_density_per_m2, 2),
-            ));
-        }
+        out.extend(a.strips.iter().map(strip_line));
         let sc = &a.scanner;
         let deflector = match sc.deflector {
             Deflector::Oscillating => "oscillating mirror (triangle)".to_string(),

@@ -242,18 +242,7 @@ pub fn combine(
         .collect();
     let prf_hz = Estimate::of(settings.prf_hz, &implied, (0.0, "assumed"));
     let timing_prf_hz = timing_prf(strips);
-    if let Some(timing) = timing_prf_hz {
-        let kept = prf_hz.value / timing;
-        if !(0.9..=1.1).contains(&kept) {
-            notes.push(format!(
-                "the time steps between pulses show {} Hz, the density needs {} Hz: the file holds \
-                 {} % of the pulses the timing implies (thinned, or pulses without echo)",
-                num(timing.round()),
-                num(prf_hz.value.round()),
-                num((kept * 100.0).round())
-            ));
-        }
-    }
+    notes.extend(timing_note(&prf_hz, timing_prf_hz));
     let max_returns = match scene.max_returns_seen {
         0 | 1 => {
             notes.push("no pulse has more than one return: max_returns assumed 5".into());
@@ -268,17 +257,7 @@ pub fn combine(
         deflector,
         max_returns,
     };
-    let tracks: Vec<bool> = strips
-        .iter()
-        .filter_map(|s| s.track.as_ref().map(|t| t.positive_right))
-        .collect();
-    if !tracks.is_empty() && tracks.iter().all(|right| !right) {
-        notes.push(
-            "positive scan angles lie left of the flight direction in this file (the LAS \
-             specification has them right): the twin's points follow the specification"
-                .into(),
-        );
-    }
+    notes.extend(sign_note(strips));
     let flight = lines(strips, &scanner, sweep_rad, settings, scene, &mut notes);
     let line_spacing = spacings(strips, &scanner);
     Ok(Acquisition {
@@ -404,6 +383,35 @@ fn amplitude(
             range: None,
         }
     }
+}
+
+/// A note when the density's PRF and the timing's differ by more than
+/// 10 %.
+fn timing_note(prf: &Estimate, timing: Option<f64>) -> Option<String> {
+    let timing = timing?;
+    let kept = prf.value / timing;
+    (!(0.9..=1.1).contains(&kept)).then(|| {
+        format!(
+            "the time steps between pulses show {} Hz, the density needs {} Hz: the file holds \
+             {} % of the pulses the timing implies (thinned, or pulses without echo)",
+            num(timing.round()),
+            num(prf.value.round()),
+            num((kept * 100.0).round())
+        )
+    })
+}
+
+/// A note when every strip has its positive scan angles on the left.
+fn sign_note(strips: &[ReadStrip]) -> Option<String> {
+    let right: Vec<bool> = strips
+        .iter()
+        .filter_map(|s| s.track.as_ref().map(|t| t.positive_right))
+        .collect();
+    (!right.is_empty() && right.iter().all(|r| !r)).then(|| {
+        "positive scan angles lie left of the flight direction in this file (the LAS \
+         specification has them right): the twin's points follow the specification"
+            .to_string()
+    })
 }
 
 /// The pulse rate the time steps show: the median over the strips.
