@@ -37,6 +37,105 @@ pub enum Command {
     /// Join the parts of a split run (`lidarsim run SURVEY --part K/N`) into
     /// the files one unsplit run writes, byte for byte.
     Merge(MergeArgs),
+    /// Make a survey that re-flies a real airborne scan (LAS or LAZ): its
+    /// ground, trees and acquisition read from the points, written as
+    /// DIR/survey.toml with the files it uses and twin.json (what was
+    /// read and how sure it is).
+    Twin(TwinArgs),
+    /// Compare two point clouds (LAS, LAZ, or a run's directory) with the
+    /// field's metrics over their common area, overall and per grid cell:
+    /// a table, and DIR/compare.json and DIR/compare.html with -o DIR.
+    Compare(CompareArgs),
+}
+
+/// The options of `lidarsim twin`.
+#[derive(Args)]
+pub struct TwinArgs {
+    /// The real scan (LAS or LAZ).
+    pub scan: PathBuf,
+    /// Directory for survey.toml, trees.csv, dtm.tif and twin.json.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// An instrument preset for the scanner's other keys (divergence,
+    /// pulse, returns, wavelength): see `lidarsim check` or docs/survey.md.
+    #[arg(long, value_name = "PRESET")]
+    pub instrument: Option<String>,
+    /// Species of every tree: pine, spruce or birch.
+    #[arg(long, default_value = "pine")]
+    pub species: String,
+    /// Flying height above the ground, m (default: read from the scan
+    /// angles).
+    #[arg(long, value_name = "H")]
+    pub altitude_m: Option<f64>,
+    /// Ground speed, m/s (default: read from the GPS times).
+    #[arg(long, value_name = "V")]
+    pub speed_mps: Option<f64>,
+    /// Pulse rate, Hz (default: the one that gives the scan's density).
+    #[arg(long, value_name = "HZ")]
+    pub prf_hz: Option<f64>,
+    /// Mirror cycles (polygon: scan lines) per second (default: read from
+    /// the sweeps of the beam).
+    #[arg(long, value_name = "HZ")]
+    pub scan_frequency_hz: Option<f64>,
+    /// Largest scan angle, degrees (default: read).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub scan_angle_deg: Option<f64>,
+    /// Compass heading of lines planned over the scan, degrees: for a scan
+    /// without GPS times or scan angles (with --altitude-m and
+    /// --scan-angle-deg).
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true)]
+    pub heading_deg: Option<f64>,
+    /// Distance between planned lines, m (default: 30 % side overlap).
+    #[arg(long, value_name = "M")]
+    pub line_spacing_m: Option<f64>,
+    /// The tree tops' window diameter A + B·h + C·h² (m, h the height):
+    /// A,B,C (default 3,0.1,0, the lidR book's; Popescu & Wynne's is
+    /// 2.51503,0,0.00901).
+    #[arg(long, value_name = "A,B,C")]
+    pub window: Option<String>,
+    /// Cell of the canopy height model, m (default: about one first return
+    /// per cell).
+    #[arg(long, value_name = "M")]
+    pub chm_cell_m: Option<f64>,
+    /// Write into a non-empty directory no twin wrote, replacing only the
+    /// twin's files there.
+    #[arg(long)]
+    pub overwrite: bool,
+}
+
+/// The options of `lidarsim compare`.
+#[derive(Args)]
+pub struct CompareArgs {
+    /// The first cloud (LAS or LAZ, or a run's output directory), e.g. the
+    /// real scan.
+    pub a: PathBuf,
+    /// The second cloud, e.g. the simulation.
+    pub b: PathBuf,
+    /// Directory for compare.json and compare.html (default: only the
+    /// table).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
+    /// Compare only within XMIN,YMIN,XMAX,YMAX (m, the clouds'
+    /// coordinates).
+    #[arg(long, value_name = "XMIN,YMIN,XMAX,YMAX", allow_hyphen_values = true)]
+    pub area: Option<String>,
+    /// Edge of the grid cells of the per-cell metrics, m.
+    #[arg(long, default_value_t = 20.0)]
+    pub cell_m: f64,
+    /// Thin the cloud of more pulses per m² to the other's pulse density
+    /// first (keeping all returns of a kept pulse).
+    #[arg(long)]
+    pub match_density: bool,
+    /// Seed of the thinning's choice of pulses.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Names of the two clouds in the table and the page.
+    #[arg(long, value_name = "A,B")]
+    pub labels: Option<String>,
+    /// Write into a non-empty directory, replacing only compare.json and
+    /// compare.html.
+    #[arg(long)]
+    pub overwrite: bool,
 }
 
 /// The options of `lidarsim demo`.

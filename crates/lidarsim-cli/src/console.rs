@@ -58,3 +58,51 @@ pub fn warn(survey: &Survey, world: &World) {
         note!("warning: {file}: {w}");
     }
 }
+
+/// The progress of a command's long steps on standard error: a bar on a
+/// terminal, else one line per step as it starts.
+pub struct Steps {
+    bar: indicatif::ProgressBar,
+    step: std::sync::Mutex<String>,
+}
+
+impl Steps {
+    /// A display for a command's steps.
+    pub fn new() -> Self {
+        use std::io::IsTerminal;
+        let bar = if std::io::stderr().is_terminal() {
+            let b = indicatif::ProgressBar::new(1000);
+            if let Ok(style) = indicatif::ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {msg:12} {bar:40} {percent:>3}%",
+            ) {
+                b.set_style(style);
+            }
+            b
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
+        Self {
+            bar,
+            step: std::sync::Mutex::new(String::new()),
+        }
+    }
+
+    /// Step `step` is `done` (0 to 1) through.
+    pub fn report(&self, step: &str, done: f64) {
+        let mut last = self.step.lock().unwrap_or_else(|e| e.into_inner());
+        if *last != step {
+            if self.bar.is_hidden() {
+                note!("{step}…");
+            }
+            self.bar.set_message(step.to_string());
+            *last = step.to_string();
+        }
+        self.bar
+            .set_position((done.clamp(0.0, 1.0) * 1000.0) as u64);
+    }
+
+    /// Removes the bar.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}

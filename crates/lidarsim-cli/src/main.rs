@@ -5,8 +5,9 @@
 //! and reports errors with a non-zero exit status (2 for a bad survey, 1
 //! for a failed run). Each command has its module: [`simulate`] (`demo`
 //! and `run`, with [`summary`] printing a finished run), [`check`],
-//! [`waveform`], [`render`] and [`mod@bench`]; [`console`] holds how the
-//! program prints, [`cpu`] the processor check.
+//! [`waveform`], [`render`], [`mod@bench`], [`twin`] and [`compare`];
+//! [`console`] holds how the program prints (and the progress of long
+//! steps), [`cpu`] the processor check.
 
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -18,11 +19,13 @@ mod console;
 mod args;
 mod bench;
 mod check;
+mod compare;
 mod cpu;
 mod parts;
 mod render;
 mod simulate;
 mod summary;
+mod twin;
 mod waveform;
 
 use args::{Cli, Command};
@@ -61,5 +64,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render::command(args),
         Command::Bench(args) => bench::command(args),
         Command::Merge(args) => parts::merge(args),
+        Command::Twin(args) => twin::command(args),
+        Command::Compare(args) => compare::command(args),
     }
 }

@@ -13,6 +13,9 @@
 //! Every command runs under an address-space limit and a timeout
 //! ([`common::limited`]); every input file is compared byte for byte
 //! before and after.
+//!
+//! Long file: one test per kind of misuse, each building its own inputs
+//! (forged LAZ tables, FIFOs, swapped parts) in a few lines of bytes.
 
 mod common;
 

@@ -7,7 +7,7 @@ mod common;
 use std::path::Path;
 use std::process::{Command, Output};
 
-use common::{GOOD, bin, run_survey, temp};
+use common::{GOOD, bin, run_survey, temp, write_las};
 
 #[test]
 fn render_writes_top_views_and_profiles_and_rejects_bad_options() {
@@ -134,36 +134,6 @@ fn png_size(path: &Path) -> (u32, u32) {
     assert_eq!(&b[..8], b"\x89PNG\r\n\x1a\n");
     let be = |at: usize| u32::from_be_bytes([b[at], b[at + 1], b[at + 2], b[at + 3]]);
     (be(16), be(20))
-}
-
-/// Writes a LAS file of points (x, y, z) with 1 cm precision.
-fn write_las(path: &Path, points: &[(f64, f64, f64)]) {
-    let mut builder = las::Builder::from((1, 2));
-    builder.transforms = las::Vector {
-        x: las::Transform {
-            scale: 0.01,
-            offset: 0.0,
-        },
-        y: las::Transform {
-            scale: 0.01,
-            offset: 0.0,
-        },
-        z: las::Transform {
-            scale: 0.01,
-            offset: 0.0,
-        },
-    };
-    let mut w = las::Writer::from_path(path, builder.into_header().unwrap()).unwrap();
-    for &(x, y, z) in points {
-        w.write_point(las::Point {
-            x,
-            y,
-            z,
-            ..Default::default()
-        })
-        .unwrap();
-    }
-    w.close().unwrap();
 }
 
 /// `render` bounds the picture to 8192 px a side and 16 million pixels:

@@ -7,6 +7,7 @@
 mod convert;
 mod part_merge;
 mod points;
+mod real;
 mod run;
 mod scene_data;
 mod stream;
@@ -69,5 +70,7 @@ fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<stream::PointStream>()?;
     m.add_function(wrap_pyfunction!(merge, m)?)?;
     m.add_class::<part_merge::PartMerge>()?;
+    m.add_function(wrap_pyfunction!(real::twin, m)?)?;
+    m.add_function(wrap_pyfunction!(real::compare, m)?)?;
     Ok(())
 }

@@ -40,7 +40,7 @@ pub fn layout_dir(survey: &Survey) -> Option<&'static str> {
 }
 
 /// The files `survey` reads: the survey file, meshes, rasters, point
-/// clouds and the trajectory file.
+/// clouds, tree tables and the trajectory file.
 pub fn input_files(survey: &Survey) -> Vec<PathBuf> {
     let raw = replayable(survey);
     let mut inputs: Vec<PathBuf> = survey.source.iter().cloned().collect();
@@ -50,14 +50,15 @@ pub fn input_files(survey: &Survey) -> Vec<PathBuf> {
         .map(|m| &m.file)
         .chain(raw.terrains.iter().map(|t| &t.file))
         .chain(raw.point_clouds.iter().map(|c| &c.file))
+        .chain(raw.tree_tables.iter().map(|t| &t.file))
         .chain(std::iter::once(&raw.platform.trajectory_file));
     inputs.extend(files.flatten().map(PathBuf::from));
     inputs
 }
 
 /// The raw survey with its seed fixed and relative file paths (meshes,
-/// terrain rasters, point clouds, trajectory file) resolved against the
-/// survey's directory.
+/// terrain rasters, point clouds, tree tables, trajectory file) resolved
+/// against the survey's directory.
 pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
     let mut raw = survey.raw.clone();
     raw.seed = Some(survey.seed);
@@ -78,7 +79,8 @@ pub fn replayable(survey: &Survey) -> crate::survey::RawSurvey {
         .iter_mut()
         .map(|m| &mut m.file)
         .chain(raw.terrains.iter_mut().map(|t| &mut t.file))
-        .chain(raw.point_clouds.iter_mut().map(|c| &mut c.file));
+        .chain(raw.point_clouds.iter_mut().map(|c| &mut c.file))
+        .chain(raw.tree_tables.iter_mut().map(|t| &mut t.file));
     for f in files.flatten() {
         resolve(f);
     }

@@ -65,6 +65,7 @@
 pub mod accel;
 pub mod budget;
 pub mod canopy;
+pub mod compare;
 pub mod demo;
 pub mod detection;
 pub mod files;
@@ -74,17 +75,20 @@ pub mod kernels;
 pub mod memory;
 pub mod message;
 pub mod output;
+pub mod owned;
 pub mod plan;
 pub mod radiometry;
 pub mod render;
 pub mod report;
 pub mod rng;
 pub mod run;
+pub mod scan;
 pub mod scene;
 pub mod sensor;
 pub mod sim;
 pub mod summary;
 pub mod survey;
+pub mod twin;
 pub mod waveform;
 pub mod world;
 

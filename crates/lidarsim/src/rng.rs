@@ -41,6 +41,8 @@ pub enum Purpose {
     ForestSeed = 10,
     /// The seed of a generated `[[terrain]]` without one.
     TerrainSeed = 11,
+    /// The seed of a `[[tree_table]]` row without one (its whorl turn).
+    TreeTableSeed = 12,
     /// Spare purpose for tests and user extensions.
     Test = 0xFFFF,
 }

@@ -149,3 +149,38 @@ pub fn crc32(bytes: &[u8]) -> u32 {
     }
     !crc
 }
+
+/// Writes a LAS 1.2 file of points (x, y, z) with 1 cm precision.
+pub fn write_las(path: &Path, points: &[(f64, f64, f64)]) {
+    let points: Vec<las::Point> = points
+        .iter()
+        .map(|&(x, y, z)| las::Point {
+            x,
+            y,
+            z,
+            ..Default::default()
+        })
+        .collect();
+    write_las_points(path, 0, &points);
+}
+
+/// Writes `points` as a LAS 1.2 file of point format `format` (0–3) with
+/// 1 cm precision.
+pub fn write_las_points(path: &Path, format: u8, points: &[las::Point]) {
+    let mut builder = las::Builder::from((1, 2));
+    builder.point_format = las::point::Format::new(format).unwrap();
+    let centimetres = las::Transform {
+        scale: 0.01,
+        offset: 0.0,
+    };
+    builder.transforms = las::Vector {
+        x: centimetres,
+        y: centimetres,
+        z: centimetres,
+    };
+    let mut w = las::Writer::from_path(path, builder.into_header().unwrap()).unwrap();
+    for p in points {
+        w.write_point(p.clone()).unwrap();
+    }
+    w.close().unwrap();
+}

@@ -15,6 +15,8 @@ NumPy structured array with the fields of the LAS file::
     survey = survey.with_mesh(vertices, faces, material="roof", class_="roof")
     survey = survey.with_trees({"x": xs, "y": ys, "species": sp, ...})
     w = survey.waveform(line=0, pulse=1000)   # one pulse's full waveform
+    twin = lidarsim.twin("scan.laz", "twin")  # a survey that re-flies a real scan
+    c = lidarsim.compare("scan.laz", twin.run())  # the field's metrics, side by side
 
 A survey with problems raises :class:`SurveyError`, whose message names
 every key at fault. The simulation runs with the GIL released on every
@@ -36,6 +38,7 @@ from ._lidarsim import SurveyError
 
 __all__ = [
     "POINT_DTYPE",
+    "compare",
     "merge",
     "TRAJECTORY_DTYPE",
     "Result",
@@ -43,6 +46,7 @@ __all__ = [
     "SurveyError",
     "Waveform",
     "__version__",
+    "twin",
 ]
 
 __version__: str = _lidarsim.VERSION
@@ -648,3 +652,147 @@ def merge(
         take_parts,
         survey._core if survey is not None else None,
     )
+
+
+#: The options of :func:`twin` that replace what is read of the acquisition.
+TWIN_ACQUISITION = (
+    "altitude_m",
+    "speed_mps",
+    "prf_hz",
+    "scan_frequency_hz",
+    "scan_angle_deg",
+    "heading_deg",
+    "line_spacing_m",
+)
+
+
+def twin(
+    path: PathLike,
+    out_dir: PathLike,
+    *,
+    species: str = "pine",
+    instrument: Optional[str] = None,
+    window: Optional[tuple] = None,
+    chm_cell_m: Optional[float] = None,
+    overwrite: bool = False,
+    verbose: bool = True,
+    **acquisition: float,
+) -> Survey:
+    """The twin of the real airborne scan at ``path`` (LAS or LAZ), as
+    ``lidarsim twin`` makes it: its ground, trees and acquisition read from
+    the points, written into ``out_dir`` as ``survey.toml`` with the files it
+    names (``trees.csv``, ``dtm.tif``) and ``twin.json``; returns the survey,
+    with ``twin.json`` as its ``twin_report`` dict.
+
+    ``species``: of every tree; ``instrument``: a scanner preset;
+    ``window``: the tree tops' window diameter ``(a, b, c)`` as
+    ``a + b·h + c·h²`` m; ``chm_cell_m``: the canopy height model's cell;
+    the keyword arguments ``altitude_m``, ``speed_mps``, ``prf_hz``,
+    ``scan_frequency_hz``, ``scan_angle_deg``, ``heading_deg`` and
+    ``line_spacing_m`` replace what is read (``docs/validation.md``). A scan
+    that cannot be twinned raises ``ValueError`` saying what is missing and
+    which argument supplies it; ``verbose`` prints what was read."""
+    unknown = sorted(set(acquisition) - set(TWIN_ACQUISITION))
+    if unknown:
+        raise TypeError(
+            f"twin() got an unexpected keyword argument {unknown[0]!r}; "
+            f"the acquisition's are {', '.join(TWIN_ACQUISITION)}"
+        )
+    raw = _lidarsim.twin(
+        os.fspath(path),
+        os.fspath(out_dir),
+        overwrite,
+        species,
+        instrument,
+        {k: float(v) for k, v in acquisition.items()},
+        None if window is None else tuple(float(v) for v in window),
+        None if chm_cell_m is None else float(chm_cell_m),
+    )
+    if verbose:
+        for line in raw["summary"]:
+            print(line)
+    survey = Survey.load(raw["survey"])
+    survey.twin_report = raw["report"]
+    return survey
+
+
+def _cloud(c: Any, name: str) -> Any:
+    """A cloud for :func:`compare`: a path as it is, else a dict of the
+    columns of a :class:`Result`, a structured array of
+    :data:`POINT_DTYPE` or a ``laspy.LasData``."""
+    if isinstance(c, (str, os.PathLike)):
+        return os.fspath(c)
+    if isinstance(c, Result):
+        c = c.points
+    if isinstance(c, np.ndarray) and c.dtype.names:
+        angle = c["scan_angle"].astype(np.float32) * np.float32(0.006)
+    elif hasattr(c, "points") and hasattr(c, "header"):  # laspy.LasData
+        if hasattr(c, "scan_angle"):
+            raw_angle = np.asarray(c.scan_angle, dtype=np.float32)
+            extended = c.header.point_format.id >= 6
+            angle = raw_angle * np.float32(0.006) if extended else raw_angle
+        else:
+            angle = np.asarray(c.scan_angle_rank, dtype=np.float32)
+    else:
+        raise TypeError(
+            f"compare: {name} must be a path, a Result, a structured array of POINT_DTYPE or a "
+            f"laspy.LasData, not {type(c).__name__}"
+        )
+
+    def col(field: str, dtype: Any) -> np.ndarray:
+        values = c[field] if isinstance(c, np.ndarray) else getattr(c, field)
+        return np.ascontiguousarray(np.asarray(values), dtype=dtype)
+
+    return {
+        "name": name,
+        "x": col("x", np.float64),
+        "y": col("y", np.float64),
+        "z": col("z", np.float64),
+        "intensity": col("intensity", np.uint16),
+        "return_number": col("return_number", np.uint8),
+        "number_of_returns": col("number_of_returns", np.uint8),
+        "classification": col("classification", np.uint8),
+        "gps_time": col("gps_time", np.float64),
+        "scan_angle_deg": np.ascontiguousarray(angle, dtype=np.float32),
+        "point_source_id": col("point_source_id", np.uint16),
+    }
+
+
+def compare(
+    a: Any,
+    b: Any,
+    out_dir: Optional[PathLike] = None,
+    *,
+    cell_m: float = 20.0,
+    area: Optional[tuple] = None,
+    match_density: bool = False,
+    seed: int = 1,
+    labels: tuple = ("A", "B"),
+    overwrite: bool = False,
+) -> Dict[str, Any]:
+    """The field's metrics of clouds ``a`` and ``b`` over their common area,
+    as ``lidarsim compare`` gives them: ``a`` and ``b`` each a LAS/LAZ path,
+    a :class:`Result` of :meth:`Survey.run`, a structured array of
+    :data:`POINT_DTYPE` or a ``laspy.LasData``. Returns ``compare.json`` as
+    a dict (``a`` and ``b`` with their ``metrics`` and ``distributions``,
+    ``difference`` = b − a, ``cells`` with each metric's values per cell as
+    NumPy arrays, NaN where a cell has none, and their paired statistics)
+    plus ``table``, the text table; with ``out_dir`` it also writes
+    ``compare.json`` and ``compare.html`` there. ``area``: ``(xmin, ymin,
+    xmax, ymax)``; ``match_density``: thin the cloud of more pulses per m²
+    to the other's first, by pulse."""
+    out = _lidarsim.compare(
+        _cloud(a, labels[0]),
+        _cloud(b, labels[1]),
+        None if out_dir is None else os.fspath(out_dir),
+        overwrite,
+        float(cell_m),
+        None if area is None else tuple(float(v) for v in area),
+        bool(match_density),
+        int(seed),
+        (str(labels[0]), str(labels[1])),
+    )
+    for m in out["cells"]["metrics"]:
+        for side in ("a", "b"):
+            m[side] = np.array([np.nan if v is None else v for v in m[side]], dtype=np.float64)
+    return out

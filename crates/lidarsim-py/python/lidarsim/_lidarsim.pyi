@@ -21,6 +21,28 @@ def merge(
     survey: Optional["SurveyCore"] = None,
 ) -> Dict[str, Any]: ...
 
+def twin(
+    path: str,
+    out_dir: str,
+    overwrite: bool = False,
+    species: str = "pine",
+    instrument: Optional[str] = None,
+    acquisition: Optional[Dict[str, float]] = None,
+    window: Optional[Tuple[float, float, float]] = None,
+    chm_cell_m: Optional[float] = None,
+) -> Dict[str, Any]: ...
+def compare(
+    a: Any,
+    b: Any,
+    out_dir: Optional[str] = None,
+    overwrite: bool = False,
+    cell_m: float = 20.0,
+    area: Optional[Tuple[float, float, float, float]] = None,
+    match_density: bool = False,
+    seed: int = 1,
+    labels: Tuple[str, str] = ("A", "B"),
+) -> Dict[str, Any]: ...
+
 class PartMerge:
     def __init__(self, out_dir: str, overwrite: bool = False, take_parts: bool = False) -> None: ...
     def add(self, part_dir: str) -> None: ...

@@ -11,3 +11,4 @@ pub mod mesh;
 pub mod obj;
 pub mod raster;
 pub mod trajectory;
+pub mod tree_table;

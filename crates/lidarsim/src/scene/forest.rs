@@ -151,6 +151,20 @@ impl Scene {
     /// tree) but built on all threads and named by number
     /// ([`SceneObject::StandTree`]).
     pub fn add_stand(&mut self, forest: usize, trees: &[TreeSpec], whorl_spacing_m: f64) {
+        self.add_trees(trees, whorl_spacing_m, |tree| SceneObject::StandTree {
+            forest: forest as u32,
+            tree,
+        });
+    }
+
+    /// Adds `trees` as [`Scene::add_stand`] does, tree `k` named
+    /// `object(k)`.
+    pub fn add_trees(
+        &mut self,
+        trees: &[TreeSpec],
+        whorl_spacing_m: f64,
+        object: impl Fn(u32) -> SceneObject,
+    ) {
         // The materials, in the order add_tree would add them; a stand has
         // a few, shared by its trees: looked up again only when a tree's
         // differ from the last one's.
@@ -171,10 +185,7 @@ impl Scene {
         }
         let first_object = self.objects.len();
         self.objects
-            .extend((0..trees.len()).map(|tree| SceneObject::StandTree {
-                forest: forest as u32,
-                tree: tree as u32,
-            }));
+            .extend((0..trees.len()).map(|tree| object(tree as u32)));
         let stand = (0..2 * trees.len()).into_par_iter().map(|k| {
             let object = (first_object + k / 2) as u32;
             tree_part(

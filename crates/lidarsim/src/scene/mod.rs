@@ -241,6 +241,13 @@ pub enum SceneObject {
         /// Index of the tree in the stand, in the order it was placed.
         tree: u32,
     },
+    /// Row `tree` of the survey's `[[tree_table]]` entry `table`.
+    TableTree {
+        /// Index of the `[[tree_table]]` entry.
+        table: u32,
+        /// Index of the tree among the table's rows.
+        tree: u32,
+    },
 }
 
 impl std::fmt::Display for SceneObject {
@@ -248,6 +255,9 @@ impl std::fmt::Display for SceneObject {
         match self {
             SceneObject::Named(name) => f.write_str(name),
             SceneObject::StandTree { forest, tree } => write!(f, "forest[{forest}].tree[{tree}]"),
+            SceneObject::TableTree { table, tree } => {
+                write!(f, "tree_table[{table}].tree[{tree}]")
+            }
         }
     }
 }
@@ -257,7 +267,7 @@ impl SceneObject {
     pub fn heap_bytes(&self) -> usize {
         match self {
             SceneObject::Named(name) => name.capacity(),
-            SceneObject::StandTree { .. } => 0,
+            SceneObject::StandTree { .. } | SceneObject::TableTree { .. } => 0,
         }
     }
 }

@@ -151,6 +151,19 @@ impl Species {
         dbh
     }
 
+    /// [`Species::dbh_from_height_m`], or the nearer end of
+    /// [`Species::DBH_RANGE_M`] for a height the curve does not reach
+    /// there (as a `[[forest]]` tree's).
+    pub fn dbh_or_nearest_m(self, height_m: f64) -> f64 {
+        let (lo, hi) = Self::DBH_RANGE_M;
+        self.dbh_from_height_m(height_m)
+            .unwrap_or(if height_m < self.height_from_dbh_m(lo) {
+                lo
+            } else {
+                hi
+            })
+    }
+
     /// [`Species::dbh_from_height_m`] of `N` trees at once, each its
     /// answer to the bit: their bisections are independent chains of
     /// dependent steps, and run side by side they overlap in the processor.

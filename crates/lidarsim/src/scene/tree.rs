@@ -20,6 +20,10 @@ pub const GOLDEN_ANGLE: f64 = 0.763_932_022_500_210_2 * std::f64::consts::PI;
 /// Height at which dbh is measured, m.
 pub const BREAST_HEIGHT_M: f64 = 1.3;
 
+/// Shortest tree accepted, m (the trunk tapers from breast height, 1.3 m,
+/// to the top, so a tree must be clearly taller than that).
+pub const MIN_TREE_HEIGHT_M: f64 = 2.0;
+
 /// A tree as described in a survey.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TreeSpec {

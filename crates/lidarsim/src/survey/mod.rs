@@ -90,9 +90,7 @@ pub const MAX_ATTITUDE_ERROR_DEG: f64 = 10.0;
 /// Seed used when the survey names none.
 pub const DEFAULT_SEED: u64 = 1;
 
-/// Shortest tree accepted, m (the trunk tapers from breast height, 1.3 m,
-/// to the top, so a tree must be clearly taller than that).
-pub const MIN_TREE_HEIGHT_M: f64 = 2.0;
+pub use crate::scene::tree::MIN_TREE_HEIGHT_M;
 
 /// Scanner settings after validation.
 #[derive(Clone, Debug, PartialEq)]
@@ -341,6 +339,7 @@ impl Survey {
             clouds: check::scene::clouds(&mut c, &raw, &materials, &base),
             trees: check::vegetation::trees(&mut c, &raw, seed),
             forests: check::vegetation::forests(&mut c, &raw, seed),
+            tree_tables: check::vegetation::tree_tables(&mut c, &raw, &base, seed),
             whorl_spacing_m,
         };
         let mut warnings = sensor.warnings;

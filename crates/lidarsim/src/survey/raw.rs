@@ -73,6 +73,9 @@ pub struct RawSurvey {
     /// `[[forest]]`.
     #[serde(default, rename = "forest", skip_serializing_if = "Vec::is_empty")]
     pub forests: Vec<RawForest>,
+    /// `[[tree_table]]`: trees from a CSV file, one a row.
+    #[serde(default, rename = "tree_table", skip_serializing_if = "Vec::is_empty")]
+    pub tree_tables: Vec<RawTreeTable>,
 }
 
 /// `[scanner]`: the laser, mirror and beam.
@@ -317,6 +320,21 @@ pub struct RawTree {
     pub extinction_per_m: Option<f64>,
     pub uniform_density: Option<f64>,
     pub seed: Option<u64>,
+}
+
+/// `[[tree_table]]`: a CSV file of trees, one a row, with a header naming
+/// the columns (`x_m`, `y_m`, `z_m`, `height_m` and optional `[[tree]]`
+/// keys).
+#[skip_serializing_none]
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+#[allow(missing_docs)]
+pub struct RawTreeTable {
+    pub file: Option<String>,
+    /// Added to every tree's position, m.
+    pub offset_m: Option<Vec<f64>>,
+    /// Species of rows without a `species` column or value.
+    pub species: Option<String>,
 }
 
 /// `[[forest]]`: a generated stand.

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use crate::geometry::DVec3;
 use crate::scene::forest::ForestSpec;
 use crate::scene::terrain::{FbmSpec, HeightGrid};
-use crate::scene::{Material, MeshPlacement, Polygon, SurfaceClass, TreeSpec};
+use crate::scene::{Material, MeshPlacement, Polygon, Species, SurfaceClass, TreeSpec};
 use crate::sensor::platform::Interpolation;
 
 /// The scene's entries, each with its index in its survey table (for
@@ -28,6 +28,8 @@ pub struct SceneSpec {
     /// `[[forest]]` entries, with their index (`None` for one with a
     /// problem, so that forests keep their numbers).
     pub forests: Vec<Option<ForestSpec>>,
+    /// `[[tree_table]]` entries.
+    pub tree_tables: Vec<TreeTableEntry>,
     /// Vertical distance between branch whorls, m.
     pub whorl_spacing_m: f64,
 }
@@ -102,6 +104,23 @@ pub struct TerrainEntry {
     pub class: SurfaceClass,
     /// Added to every node, m.
     pub offset_m: DVec3,
+}
+
+/// A checked `[[tree_table]]`: a CSV file of trees, read by
+/// [`crate::io::tree_table`].
+#[derive(Clone, Debug)]
+pub struct TreeTableEntry {
+    /// Index in `[[tree_table]]`.
+    pub index: usize,
+    /// The CSV file (relative paths resolved against the survey's
+    /// directory).
+    pub path: PathBuf,
+    /// Added to every tree's position, m.
+    pub offset_m: DVec3,
+    /// Species of rows that name none.
+    pub species: Option<Species>,
+    /// The survey's seed, from which rows without a `seed` take theirs.
+    pub survey_seed: u64,
 }
 
 /// A checked `[[point_cloud]]`.

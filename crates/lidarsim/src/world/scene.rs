@@ -6,10 +6,12 @@
 use crate::accel::{Bvh, ground_below};
 use crate::geometry::DVec3;
 use crate::geometry::MAX_COORDINATE_M;
+use crate::io::tree_table::{TableSettings, read_tree_table};
 use crate::message::num;
+use crate::rng::Purpose;
 use crate::scene::forest::{generate, polygon_area};
 use crate::scene::terrain::HeightGrid;
-use crate::scene::{Primitive, Scene, Shape};
+use crate::scene::{Primitive, Scene, SceneObject, Shape};
 use crate::survey::spec::{CloudSource, MeshSource, TerrainSource};
 use crate::survey::{KeyPath, Survey};
 
@@ -149,6 +151,7 @@ pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> B
         ));
         scene.add_tree(tree, whorl, format!("tree[{i}]"));
     }
+    add_tree_tables(&mut scene, survey, &mut owners, problems);
     let mut forest_trees = Vec::new();
     let mut warnings = Vec::new();
     if spec.forests.is_empty() {
@@ -193,6 +196,50 @@ pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> B
         forest_trees,
         warnings,
         index_time_s,
+    }
+}
+
+/// Reads the survey's `[[tree_table]]` files into `scene`, each problem at
+/// its entry's `file` key; refuses more trees than a survey may hold.
+fn add_tree_tables(
+    scene: &mut Scene,
+    survey: &Survey,
+    owners: &mut Vec<(KeyPath, usize)>,
+    problems: &mut Vec<(KeyPath, String)>,
+) {
+    let spec = &survey.scene_spec;
+    let mut trees = spec.trees.len();
+    for t in &spec.tree_tables {
+        let key = KeyPath::root().key("tree_table").index(t.index);
+        let settings = TableSettings {
+            offset_m: t.offset_m,
+            species: t.species,
+            seed: crate::rng::entry_seed(t.survey_seed, Purpose::TreeTableSeed, t.index),
+        };
+        let table = match read_tree_table(&t.path, &settings) {
+            Ok(table) => table,
+            Err(e) => {
+                problems.push((key.key("file"), e.to_string()));
+                continue;
+            }
+        };
+        trees += table.len();
+        if trees as f64 > crate::survey::MAX_TREES {
+            problems.push((
+                key.key("file"),
+                format!(
+                    "'{}' brings the survey to {trees} trees; a survey may hold at most {}",
+                    t.path.display(),
+                    num(crate::survey::MAX_TREES)
+                ),
+            ));
+            continue;
+        }
+        owners.push((key.key("file"), scene.primitives.len()));
+        let index = t.index as u32;
+        scene.add_trees(&table, spec.whorl_spacing_m, |tree| {
+            SceneObject::TableTree { table: index, tree }
+        });
     }
 }
 

@@ -147,3 +147,49 @@ fn terrain_example_loads_with_trees_on_the_terrain() {
     }
     assert!(w.forest_trees[0] > 1000, "{:?}", w.forest_trees);
 }
+
+/// A `[[tree_table]]` row gives the primitives of the `[[tree]]` entry
+/// with the same keys (its offset added); a bad cell is reported at the
+/// table's `file` key, naming the line and column.
+#[test]
+fn a_tree_table_gives_the_trees_its_rows_describe() {
+    let dir = std::env::temp_dir().join(format!("lidarsim-world-table-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("trees.csv"),
+        "# two trees\nid,x_m,y_m,z_m,species,height_m,crown_base_m,crown_radius_m,dbh_m,seed\n\
+         1,10,20,0,pine,18,9,2.5,0.25,7\n",
+    )
+    .unwrap();
+    let table = format!("{MINIMAL}\n[[tree_table]]\nfile = \"trees.csv\"\noffset_m = [-5, 5, 0]\n");
+    let entry = format!(
+        "{MINIMAL}\n[[tree]]\nposition_m = [5, 25, 0]\nspecies = \"pine\"\nheight_m = 18\n\
+         crown_base_m = 9\ncrown_radius_m = 2.5\ndbh_m = 0.25\nseed = 7\n"
+    );
+    let survey_path = dir.join("s.toml");
+    let (_, a) = build(&table, Some(&survey_path), None).unwrap();
+    let (_, b) = build(&entry, Some(&survey_path), None).unwrap();
+    let shapes = |w: &World| -> Vec<String> {
+        w.scene()
+            .primitives
+            .iter()
+            .map(|p| format!("{:?}", p.shape))
+            .collect()
+    };
+    assert_eq!(shapes(&a), shapes(&b));
+    assert_eq!(a.scene().primitives.len(), 3);
+    std::fs::write(
+        dir.join("trees.csv"),
+        "x_m,y_m,z_m,height_m\n1,2,0,15\n1,2,0,tall\n",
+    )
+    .unwrap();
+    let text = format!("{MINIMAL}\n[[tree_table]]\nfile = \"trees.csv\"\nspecies = \"birch\"\n");
+    let e = build(&text, Some(&survey_path), None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("tree_table[0].file") && e.contains("line 3, column 4 (height_m)"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -7,7 +7,8 @@ use crate::canopy::{CanopyConfig, Marching, ReturnModel};
 use crate::message::num;
 use crate::scene::forest::ForestSpec;
 use crate::scene::{Species, TreeSpec};
-use crate::survey::{KeyPath, MAX_SPECIES_WEIGHT, MAX_TREES, RawSurvey, raw};
+use crate::survey::spec::TreeTableEntry;
+use crate::survey::{KeyPath, MAX_SPECIES_WEIGHT, MAX_TREES, MIN_TREE_HEIGHT_M, RawSurvey, raw};
 
 /// Checks `[vegetation]`: the canopy march and the whorl spacing.
 pub(crate) fn vegetation(c: &mut Checker, raw: &RawSurvey) -> (CanopyConfig, f64) {
@@ -132,9 +133,52 @@ pub(crate) fn forests(c: &mut Checker, raw: &RawSurvey, seed: u64) -> Vec<Option
     out
 }
 
-/// Shortest tree accepted, m (the trunk tapers from breast height, 1.3 m,
-/// to the top, so a tree must be clearly taller than that).
-pub const MIN_TREE_HEIGHT_M: f64 = 2.0;
+/// Checks `[[tree_table]]` entries: a CSV file each (read by the world),
+/// an offset and a default species.
+pub(crate) fn tree_tables(
+    c: &mut Checker,
+    raw: &RawSurvey,
+    base: &std::path::Path,
+    seed: u64,
+) -> Vec<TreeTableEntry> {
+    let mut out = Vec::new();
+    for (index, t) in raw.tree_tables.iter().enumerate() {
+        let tp = KeyPath::root().key("tree_table").index(index);
+        let problems = c.problems.len();
+        let offset_m = match &t.offset_m {
+            None => Some(crate::geometry::DVec3::ZERO),
+            some => c.point(tp.key("offset_m"), some),
+        };
+        let species = t.species.as_deref().and_then(|name| {
+            let species = Species::from_name(name);
+            if species.is_none() {
+                c.err(
+                    tp.key("species"),
+                    format!("unknown species '{name}'; expected pine, spruce or birch"),
+                );
+            }
+            species
+        });
+        if t.file.is_none() {
+            c.err(
+                tp.key("file"),
+                "is required: a CSV file of trees, one a row (x_m, y_m, z_m, height_m, …)",
+            );
+        }
+        if let (Some(file), Some(offset_m), true) =
+            (&t.file, offset_m, c.problems.len() == problems)
+        {
+            out.push(TreeTableEntry {
+                index,
+                path: base.join(file),
+                offset_m,
+                species,
+                survey_seed: seed,
+            });
+        }
+    }
+    out
+}
 
 /// Validates one `[[tree]]` entry.
 fn check_tree(
