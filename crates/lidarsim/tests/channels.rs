@@ -69,15 +69,16 @@ fn each_channel_fires_its_share_of_the_pulses() {
 /// roof plate 1 m up. A Gaussian beam of full divergence γ has its 1/e²
 /// radius `w = Rγ/2` and a standard deviation `w/2` across the edge: at
 /// 2 mrad and 500 m that is 0.25 m, so `Q(1) = 15.9 %` of the energy falls
-/// on the plate (a second echo, the pulse being 0.6 m long); at 0.2 mrad
-/// the edge is ten deviations away and nothing does.
+/// on the plate (a second echo, the pulse being 0.6 m long, for a receiver
+/// that resolves what its waveform resolves); at 0.2 mrad the edge is ten
+/// deviations away and nothing does.
 #[test]
 fn each_channel_spreads_its_own_divergence() {
     let plate = "[materials.plate]\nreflectance = 0.5\n[[polygon]]\nmaterial = \"plate\"\n\
                  class = \"roof\"\nvertices_m = [[-50, -50, 1], [0, -50, 1], [0, 50, 1], [-50, 50, 1]]\n";
     let points = fly(
-        "subrays = 241\ndivergence_mrad = 0.2\n[[scanner.channels]]\ndivergence_mrad = 2.0\n\
-         [[scanner.channels]]",
+        "subrays = 241\ndivergence_mrad = 0.2\necho_detection = \"waveform\"\n\
+         [[scanner.channels]]\ndivergence_mrad = 2.0\n[[scanner.channels]]",
         0.25,
         "reflectance = 0.5",
         plate,

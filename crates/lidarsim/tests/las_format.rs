@@ -36,6 +36,9 @@ seed = 5
 prf_hz = 50000
 scan_frequency_hz = 40
 scan_angle_deg = 18
+# Intensity from the echo's energy, Eq. 2 (a discrete receiver records the
+# peak, lower on the stretched echoes of oblique pulses).
+echo_detection = "waveform"
 [output]
 formats = ["las", "xyz"]
 {extra}

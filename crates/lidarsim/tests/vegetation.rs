@@ -304,8 +304,9 @@ fn energies(s: &Case) -> (f64, f64) {
 fn energy_through_a_crown_is_conserved_and_follows_the_optical_depth() {
     // Nadir pulses 2 cm off the axis from 100 m (footprints of 3 cm), no
     // noise, a threshold low enough to see every foliage echo.
+    // Waveform processing records each echo's energy, every echo apart.
     let scanner = "prf_hz = 20000\nscan_angle_deg = 0\ndivergence_mrad = 0.3\nmax_returns = 15\n\
-                   [receiver]\nmin_amplitude = 1e-6";
+                   echo_detection = \"waveform\"\n[receiver]\nmin_amplitude = 1e-6";
     let run = |tree: &str| {
         let mut s = survey(scanner, (0.02, 0.05, 0.1), tree);
         for l in &mut s.w.lines {
@@ -368,7 +369,7 @@ fn capped_pulses_keep_the_ground_echo_and_foliage_is_not_ground() {
         let s = survey(
             &format!(
                 "prf_hz = 20000\nscan_angle_deg = 0\nmax_returns = {returns}\n\
-                 [receiver]\nmin_amplitude = 1e-6"
+                 echo_detection = \"waveform\"\n[receiver]\nmin_amplitude = 1e-6"
             ),
             (0.3, 0.3, 1.0),
             &tree,

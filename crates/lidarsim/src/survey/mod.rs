@@ -331,7 +331,7 @@ impl Survey {
         let navigation = check::navigation::check_navigation(&mut c, &raw);
         let output = check::output::output(&mut c, &raw);
         let materials = check::scene::materials(&mut c, &raw);
-        let (canopy, whorl_spacing_m) = check::vegetation::vegetation(&mut c, &raw);
+        let (canopy, foliage) = check::vegetation::vegetation(&mut c, &raw);
         let scene_spec = SceneSpec {
             polygons: check::scene::polygons(&mut c, &raw, &materials),
             meshes: check::scene::meshes(&mut c, &raw, &materials, &base),
@@ -340,7 +340,7 @@ impl Survey {
             trees: check::vegetation::trees(&mut c, &raw, seed),
             forests: check::vegetation::forests(&mut c, &raw, seed),
             tree_tables: check::vegetation::tree_tables(&mut c, &raw, &base, seed),
-            whorl_spacing_m,
+            foliage,
         };
         let mut warnings = sensor.warnings;
         let line_spec = check::lines::lines(

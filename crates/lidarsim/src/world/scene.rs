@@ -143,13 +143,13 @@ pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> B
             problems.push((key.key("file"), e.to_string()));
         }
     }
-    let whorl = spec.whorl_spacing_m;
+    let foliage = &spec.foliage;
     for (i, tree) in &spec.trees {
         owners.push((
             root.key("tree").index(*i).key("position_m"),
             scene.primitives.len(),
         ));
-        scene.add_tree(tree, whorl, format!("tree[{i}]"));
+        scene.add_tree(tree, foliage, format!("tree[{i}]"));
     }
     add_tree_tables(&mut scene, survey, &mut owners, problems);
     let mut forest_trees = Vec::new();
@@ -187,7 +187,7 @@ pub(super) fn build(survey: &Survey, problems: &mut Vec<(KeyPath, String)>) -> B
         }
         forest_trees.push(trees.len());
         owners.push((fp.clone(), scene.primitives.len()));
-        scene.add_stand(i, &trees, whorl);
+        scene.add_stand(i, &trees, foliage);
     }
     check_far(&scene, &owners, problems);
     let (index, index_time_s) = index(scene);
@@ -237,8 +237,9 @@ fn add_tree_tables(
         }
         owners.push((key.key("file"), scene.primitives.len()));
         let index = t.index as u32;
-        scene.add_trees(&table, spec.whorl_spacing_m, |tree| {
-            SceneObject::TableTree { table: index, tree }
+        scene.add_trees(&table, &spec.foliage, |tree| SceneObject::TableTree {
+            table: index,
+            tree,
         });
     }
 }

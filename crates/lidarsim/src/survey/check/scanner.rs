@@ -2,7 +2,7 @@
 //! waveform's sampling and noise, and echo detection.
 
 use super::Checker;
-use crate::detection::{DetectorConfig, ReturnSelection};
+use crate::detection::{DetectorConfig, EchoDetection, ReturnSelection};
 use crate::message::num;
 use crate::survey::preset::{self, PresetUse};
 use crate::survey::{
@@ -10,6 +10,13 @@ use crate::survey::{
     RawSurvey, ScannerSettings,
 };
 use crate::waveform::{PulseShape, ReceiverConfig, range_to_bin};
+
+/// The dead zone of a discrete-return receiver that names none, m: 2.7 m,
+/// "returns must be at least 2.7 m apart to be counted as independent"
+/// for the Leica ALS50-II (NERC-ARF Data Analysis Node, sensor notes on
+/// the Leica LIDAR), the one such figure published for an airborne
+/// discrete-return scanner that we found.
+pub const DEFAULT_DEAD_ZONE_M: f64 = 2.7;
 
 /// The checked `[scanner]` and `[receiver]`.
 pub(crate) struct Sensor {
@@ -127,6 +134,35 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
             ReturnSelection::default()
         }),
     };
+    let detection = match s.echo_detection.as_deref() {
+        None => EchoDetection::default(),
+        Some(name) => EchoDetection::from_name(name).unwrap_or_else(|| {
+            c.err(
+                sp.key("echo_detection"),
+                format!(
+                    "unknown detection '{name}'; expected \"discrete\" (the default: a \
+                     discrete-return receiver) or \"waveform\" (online waveform processing)"
+                ),
+            );
+            EchoDetection::default()
+        }),
+    };
+    // A discrete receiver's dead zone, by default the one published for
+    // an airborne discrete-return scanner (the Leica ALS50-II's, NERC-ARF
+    // sensor notes); online waveform processing resolves what its
+    // waveform resolves.
+    let min_separation_m = c.number(
+        sp.key("min_return_separation_m"),
+        s.min_return_separation_m,
+        match detection {
+            EchoDetection::Discrete => DEFAULT_DEAD_ZONE_M,
+            EchoDetection::Waveform => 0.0,
+        },
+        0.0,
+        false,
+        100.0,
+        " m",
+    );
     let min_range_m = c.number(
         sp.key("min_range_m"),
         s.min_range_m,
@@ -265,6 +301,8 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
             min_amplitude,
             max_returns,
             selection,
+            detection,
+            min_separation_m,
         },
         speckle_looks: r.speckle.unwrap_or(false).then_some(speckle_looks),
         intensity_gain,

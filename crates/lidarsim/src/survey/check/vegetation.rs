@@ -6,12 +6,12 @@ use super::{Checker, outline};
 use crate::canopy::{CanopyConfig, Marching, ReturnModel};
 use crate::message::num;
 use crate::scene::forest::ForestSpec;
-use crate::scene::{Species, TreeSpec};
+use crate::scene::{FoliageModel, FoliageSettings, Species, TreeSpec};
 use crate::survey::spec::TreeTableEntry;
 use crate::survey::{KeyPath, MAX_SPECIES_WEIGHT, MAX_TREES, MIN_TREE_HEIGHT_M, RawSurvey, raw};
 
-/// Checks `[vegetation]`: the canopy march and the whorl spacing.
-pub(crate) fn vegetation(c: &mut Checker, raw: &RawSurvey) -> (CanopyConfig, f64) {
+/// Checks `[vegetation]`: the canopy march and how crowns are filled.
+pub(crate) fn vegetation(c: &mut Checker, raw: &RawSurvey) -> (CanopyConfig, FoliageSettings) {
     let root = KeyPath::root();
     let v = &raw.vegetation;
     let vp = root.key("vegetation");
@@ -72,16 +72,60 @@ pub(crate) fn vegetation(c: &mut Checker, raw: &RawSurvey) -> (CanopyConfig, f64
         return_model,
         marching,
     };
-    let whorl = c.number(
-        vp.key("whorl_spacing_m"),
-        v.whorl_spacing_m,
-        0.3,
-        0.0,
-        true,
-        10.0,
-        " m",
-    );
-    (canopy, whorl)
+    let model = match v.foliage.as_deref() {
+        None => FoliageModel::default(),
+        Some(name) => FoliageModel::from_name(name).unwrap_or_else(|| {
+            c.err(
+                vp.key("foliage"),
+                format!(
+                    "unknown foliage model '{name}'; expected \"physical\" (the default) or \
+                     \"specification\" (the specification's three factors)"
+                ),
+            );
+            FoliageModel::default()
+        }),
+    };
+    let d = FoliageSettings::default();
+    let foliage = FoliageSettings {
+        model,
+        whorl_spacing_m: c.number(
+            vp.key("whorl_spacing_m"),
+            v.whorl_spacing_m,
+            d.whorl_spacing_m,
+            0.0,
+            true,
+            10.0,
+            " m",
+        ),
+        clump_m: c.number(
+            vp.key("clump_m"),
+            v.clump_m,
+            d.clump_m,
+            0.01,
+            false,
+            10.0,
+            " m",
+        ),
+        clump_fraction: c.number(
+            vp.key("clump_fraction"),
+            v.clump_fraction,
+            d.clump_fraction,
+            0.0,
+            true,
+            1.0,
+            "",
+        ),
+        shell_m: c.number(
+            vp.key("shell_m"),
+            v.shell_m,
+            d.shell_m,
+            0.0,
+            true,
+            1000.0,
+            " m",
+        ),
+    };
+    (canopy, foliage)
 }
 
 /// Checks `[[tree]]` entries.
@@ -278,15 +322,17 @@ fn check_tree(
         tree.crown_radius_m,
         " m",
     );
-    tree.extinction_per_m = c.number(
-        tp.key("extinction_per_m"),
-        t.extinction_per_m,
-        tree.extinction_per_m,
-        0.0,
-        false,
-        100.0,
-        " 1/m",
-    );
+    tree.extinction_per_m = t.extinction_per_m.map(|k| {
+        c.number(
+            tp.key("extinction_per_m"),
+            Some(k),
+            k,
+            0.0,
+            false,
+            100.0,
+            " 1/m",
+        )
+    });
     tree.uniform_density = t
         .uniform_density
         .map(|d| c.number(tp.key("uniform_density"), Some(d), 0.5, 0.0, false, 1.0, ""));
