@@ -4,10 +4,10 @@
 //! angle in the LAS field's 0.006° units, extra bytes as `f32` — using the
 //! library's own encoders, so an array and the file agree to the bit.
 
-use std::io;
-
 use lidarsim::files::TrajectoryRow;
-use lidarsim::output::{LasSettings, PointRecord, PointSink, return_numbers, scan_angle_units};
+use lidarsim::output::{
+    LasSettings, PointRecord, PointSink, WriteCause, return_numbers, scan_angle_units,
+};
 
 /// The fields of a point, in order: (name, NumPy type). Names are laspy's
 /// dimension names where it has one, else the LAS file's extra-byte names;
@@ -54,7 +54,7 @@ pub const TRAJECTORY_FIELDS: [(&str, &str); 8] = [
 ];
 
 /// Appends the packed bytes of `p` to `out`.
-pub fn pack(settings: &LasSettings, p: &PointRecord, out: &mut Vec<u8>) -> io::Result<()> {
+pub fn pack(settings: &LasSettings, p: &PointRecord, out: &mut Vec<u8>) -> Result<(), WriteCause> {
     let q = settings.quantize_point(p.position_m)?;
     for (a, qa) in q.iter().enumerate() {
         let v = f64::from(*qa) * settings.scale_m + settings.offset_m[a];
@@ -112,7 +112,10 @@ pub struct PackSink {
 }
 
 impl PointSink for PackSink {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    /// A point the LAS scale and offset cannot store.
+    type Error = WriteCause;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteCause> {
         self.bytes.reserve(points.len() * RECORD_BYTES);
         for p in points {
             pack(&self.settings, p, &mut self.bytes)?;
@@ -120,7 +123,7 @@ impl PointSink for PackSink {
         Ok(())
     }
 
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), WriteCause> {
         Ok(())
     }
 

@@ -12,6 +12,7 @@ pub mod checksum;
 pub mod crs;
 #[cfg(target_os = "linux")]
 mod direct;
+mod error;
 mod las;
 pub mod layout;
 pub mod own;
@@ -20,6 +21,7 @@ mod ply;
 pub mod text;
 mod xyz;
 
+pub use error::{AtFile, WriteCause, WriteError};
 pub use las::{
     Digitizer, HEADER_SIZE_14, HeaderError, JoinedLas, LasJoin, LasSettings, LasWriter,
     POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN, RawHeader, WAVEFORM_BITS, WAVEFORM_DESCRIPTORS,
@@ -135,28 +137,40 @@ impl WaveformBlock {
     }
 }
 
-/// Receives the points of a survey in pulse order.
+/// Receives the points of a survey in pulse order (as ripgrep's searcher
+/// hands its matches to a `Sink`): its error is its own type, which the
+/// run reports as it is.
 pub trait PointSink: Send {
+    /// Why the sink could not take the points: [`WriteError`] for the file
+    /// writers, whose errors name their file.
+    type Error;
     /// Appends points.
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()>;
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), Self::Error>;
     /// Appends points together with the waveforms of their pulses (empty
     /// unless the simulator was asked to record waveforms). Sinks that do
     /// not store waveforms keep the default, which writes the points only.
-    fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
+    fn write_block(
+        &mut self,
+        points: &[PointRecord],
+        waveforms: &WaveformBlock,
+    ) -> Result<(), Self::Error> {
         let _ = waveforms;
         self.write(points)
     }
     /// Completes the output (headers, renaming).
-    fn finish(self: Box<Self>) -> io::Result<()>;
+    fn finish(self: Box<Self>) -> Result<(), Self::Error>;
     /// Completes the output for the points written so far but leaves it
     /// under its temporary name: the files of an interrupted run, which a
     /// resumed run continues. Sinks without files finish.
-    fn suspend(self: Box<Self>) -> io::Result<()> {
+    fn suspend(self: Box<Self>) -> Result<(), Self::Error> {
         self.finish()
     }
     /// Abandons the output, removing anything partial.
     fn discard(self: Box<Self>);
 }
+
+/// A sink of the file writers' kind, as a run holds its sinks.
+pub type FileSink = dyn PointSink<Error = WriteError>;
 
 /// Keeps all points in memory.
 #[derive(Debug, Default)]
@@ -166,11 +180,13 @@ pub struct MemorySink {
 }
 
 impl PointSink for MemorySink {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    /// Memory that is there never fails.
+    type Error = std::convert::Infallible;
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), Self::Error> {
         self.points.extend_from_slice(points);
         Ok(())
     }
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), Self::Error> {
         Ok(())
     }
     fn discard(self: Box<Self>) {}
@@ -374,7 +390,7 @@ impl AtomicFile {
     /// The partial file is created anew and exclusively: a file or a
     /// symbolic link already under that name is removed (the link, never
     /// what it points to), so that nothing outside the output is written.
-    pub fn create(target: &Path) -> io::Result<Self> {
+    pub fn create(target: &Path) -> Result<Self, WriteError> {
         remove_if_present(target)?;
         Self::create_beside(target)
     }
@@ -382,19 +398,14 @@ impl AtomicFile {
     /// [`AtomicFile::create`] that leaves a final file already at `target`
     /// until this one is committed over it: for a caller that removes that
     /// file itself, once it knows its run will go ahead.
-    pub fn create_beside(target: &Path) -> io::Result<Self> {
+    pub fn create_beside(target: &Path) -> Result<Self, WriteError> {
         let partial = Self::partial_of(target);
         remove_if_present(&partial)?;
         let file = std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(&partial)
-            .map_err(|e| {
-                io::Error::new(
-                    e.kind(),
-                    format!("cannot create '{}': {e}", partial.display()),
-                )
-            })?;
+            .at(&partial)?;
         Ok(Self {
             writer: Some(BufWriter::with_capacity(1 << 20, OutFile::new(file, 0))),
             partial,
@@ -409,29 +420,33 @@ impl AtomicFile {
     /// and opened for writing at its end. The file must be a regular file
     /// (a symbolic link is refused, not followed). Dropped uncommitted, the
     /// partial file is kept, so that the run can be resumed again.
-    pub fn reopen(target: &Path, len: u64) -> io::Result<Self> {
+    pub fn reopen(target: &Path, len: u64) -> Result<Self, WriteError> {
         let partial = Self::partial_of(target);
-        let named = |e: io::Error| file_error(&partial, e);
-        let meta = std::fs::symlink_metadata(&partial).map_err(named)?;
+        let refuse = |reason: String| {
+            WriteError::new(
+                &partial,
+                WriteCause::Mismatch {
+                    action: "continue",
+                    reason,
+                },
+            )
+        };
+        let meta = std::fs::symlink_metadata(&partial).at(&partial)?;
         if !meta.file_type().is_file() {
-            return Err(named(io::Error::new(
-                io::ErrorKind::InvalidData,
-                "not a regular file: an interrupted run leaves its files as regular files",
-            )));
+            return Err(refuse(
+                "it is not a regular file (an interrupted run leaves its files as regular files)"
+                    .into(),
+            ));
         }
         let have = meta.len();
         if have < len {
-            return Err(named(io::Error::new(
-                io::ErrorKind::InvalidData,
-                format!(
-                    "cannot continue this file: it has {have} bytes, fewer than the {len} \
-                     the interrupted run wrote"
-                ),
+            return Err(refuse(format!(
+                "it has {have} bytes, fewer than the {len} the interrupted run wrote"
             )));
         }
-        let mut file = open_no_follow(&partial).map_err(named)?;
-        file.set_len(len).map_err(named)?;
-        let end = file.seek(SeekFrom::End(0)).map_err(named)?;
+        let mut file = open_no_follow(&partial).at(&partial)?;
+        file.set_len(len).at(&partial)?;
+        let end = file.seek(SeekFrom::End(0)).at(&partial)?;
         Ok(Self {
             writer: Some(BufWriter::with_capacity(1 << 20, OutFile::new(file, end))),
             partial,
@@ -466,8 +481,8 @@ impl AtomicFile {
     }
 
     /// `e` as an error that names this file.
-    pub fn error(&self, e: io::Error) -> io::Error {
-        file_error(&self.target, e)
+    pub fn error(&self, e: io::Error) -> WriteError {
+        WriteError::io(&self.target, e)
     }
 
     /// The buffered writer.
@@ -515,22 +530,23 @@ impl AtomicFile {
     /// output of an interrupted run, complete for what it holds, which a
     /// resumed run continues ([`AtomicFile::reopen`]) and only a complete
     /// run renames. Errors name the file.
-    pub fn suspend(mut self) -> io::Result<()> {
+    pub fn suspend(mut self) -> Result<(), WriteError> {
         let partial = self.partial.clone();
         let w = self.writer.take().expect("writer present until commit");
         let file = w
             .into_inner()
-            .map_err(|e| file_error(&partial, e.into_error()))?
+            .map_err(|e| e.into_error())
+            .at(&partial)?
             .file;
-        file.sync_all().map_err(|e| file_error(&partial, e))?;
+        file.sync_all().at(&partial)?;
         self.committed = true;
         Ok(())
     }
 
     /// Flushes, syncs and renames to the final name. Errors name the file.
-    pub fn commit(mut self) -> io::Result<()> {
+    pub fn commit(mut self) -> Result<(), WriteError> {
         let target = self.target.clone();
-        let named = |e: io::Error| file_error(&target, e);
+        let named = |e: io::Error| WriteError::io(&target, e);
         let w = self.writer.take().expect("writer present until commit");
         let file = match w.into_inner() {
             Ok(f) => f.file,
@@ -555,33 +571,6 @@ impl AtomicFile {
     }
 }
 
-/// An I/O error on a named file (carried inside an [`io::Error`], so that
-/// whoever reports it can name the file: see [`file_error`]).
-#[derive(Debug, thiserror::Error)]
-#[error("{}: {source}", path.display())]
-pub struct FileError {
-    /// The file.
-    pub path: PathBuf,
-    /// What went wrong.
-    #[source]
-    pub source: io::Error,
-}
-
-/// Wraps `e` into an [`io::Error`] of the same kind holding a [`FileError`]
-/// for `path` (an error that already names a file is returned unchanged).
-pub fn file_error(path: &Path, e: io::Error) -> io::Error {
-    if e.get_ref().is_some_and(|i| i.is::<FileError>()) {
-        return e;
-    }
-    io::Error::new(
-        e.kind(),
-        FileError {
-            path: path.to_path_buf(),
-            source: e,
-        },
-    )
-}
-
 impl Drop for AtomicFile {
     fn drop(&mut self) {
         if !self.committed && !self.keep_on_drop {
@@ -593,9 +582,9 @@ impl Drop for AtomicFile {
 
 /// Removes the file or symbolic link `path` (never what a link points
 /// to); a missing one is fine.
-fn remove_if_present(path: &Path) -> io::Result<()> {
+fn remove_if_present(path: &Path) -> Result<(), WriteError> {
     match std::fs::remove_file(path) {
-        Err(e) if e.kind() != io::ErrorKind::NotFound => Err(file_error(path, e)),
+        Err(e) if e.kind() != io::ErrorKind::NotFound => Err(WriteError::io(path, e)),
         _ => Ok(()),
     }
 }
@@ -614,9 +603,9 @@ fn open_no_follow(path: &Path) -> io::Result<File> {
 }
 
 /// Writes a whole small file atomically.
-pub fn write_atomic(target: &Path, bytes: &[u8]) -> io::Result<()> {
+pub fn write_atomic(target: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     let mut f = AtomicFile::create(target)?;
-    f.writer().write_all(bytes)?;
+    f.writer().write_all(bytes).at(target)?;
     f.commit()
 }
 

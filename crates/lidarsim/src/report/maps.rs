@@ -209,7 +209,7 @@ mod tests {
         // The median cell holds the planned density (edge cells are cut).
         assert!((mean - 8.0).abs() < 0.02 * 8.0, "{mean}");
         assert_eq!(sink.returns_per_pulse[1], pts.len() as u64);
-        assert_eq!(sink.single_pulse, Some((0, 0)));
+        assert_eq!(sink.single_pulse.map(|s| (s.line, s.pulse)), Some((0, 0)));
     }
 
     #[test]

@@ -92,7 +92,7 @@ impl Simulator<'_> {
     /// Simulates pulse `k` of `line`, appending its points to `out`.
     /// Returns the number of echoes, or `None` when no pulse leaves at
     /// this tick (a polygon facet looking outside the field of view).
-    pub fn simulate_pulse(
+    pub(crate) fn simulate_pulse(
         &self,
         line: &FlightLine,
         k: u64,
