@@ -3,7 +3,7 @@
 //! dicts in `diagnostics`); a file that cannot be read, written, joined or
 //! continued is an `OSError` of its kind — `InputError`, `OutputError`,
 //! `PartError`, `ResumeError`, `BudgetError` — whose message names the
-//! file and whose `path` attribute (and `OSError`'s `filename`) holds it.
+//! file and whose `path` attribute holds it.
 
 use lidarsim::Error;
 use lidarsim::output::{WriteCause, WriteError};
@@ -137,13 +137,10 @@ pub fn point_error(cause: &WriteCause) -> PyErr {
     OutputError::new_err(cause.to_string())
 }
 
-/// Sets `path` and `filename` (the attribute `OSError` has for it) of an
-/// exception to the file, as a string.
+/// Sets `path` of an exception to the file, as a string. (Not
+/// `OSError`'s `filename`, which would make the message "[Errno None]
+/// None: path" instead of the library's.)
 fn set_path(py: Python<'_>, err: &PyErr, path: Option<&std::path::Path>) {
     let path = path.map(|p| p.display().to_string());
-    let value = err.value(py);
-    let _ = value.setattr("path", path.as_deref());
-    if path.is_some() {
-        let _ = value.setattr("filename", path.as_deref());
-    }
+    let _ = err.value(py).setattr("path", path.as_deref());
 }

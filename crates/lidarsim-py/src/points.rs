@@ -69,7 +69,7 @@ pub fn pack(settings: &LasSettings, p: &PointRecord, out: &mut Vec<u8>) -> Resul
         u8::from(p.edge_of_flight_line),
         p.channel & 3,
         p.classification,
-        p.component,
+        p.component.code(),
     ]);
     out.extend_from_slice(&scan_angle_units(p.scan_angle_deg).to_le_bytes());
     out.extend_from_slice(&p.point_source_id.to_le_bytes());
@@ -82,7 +82,7 @@ pub fn pack(settings: &LasSettings, p: &PointRecord, out: &mut Vec<u8>) -> Resul
     ] {
         out.extend_from_slice(&(v as f32).to_le_bytes());
     }
-    out.extend_from_slice(&p.object_id.to_le_bytes());
+    out.extend_from_slice(&p.object_code().to_le_bytes());
     for e in [p.error_m.x, p.error_m.y, p.error_m.z] {
         out.extend_from_slice(&(e as f32).to_le_bytes());
     }

@@ -114,9 +114,9 @@ impl PointStream {
             let hold = Hold::from_env();
             let progress = |n: u64| {
                 counter.store(n, Ordering::SeqCst);
-                let held = hold
-                    .as_ref()
-                    .map_or(Ok(()), |h| h.wait(n, || stop_flag.load(Ordering::SeqCst), || {}));
+                let held = hold.as_ref().map_or(Ok(()), |h| {
+                    h.wait(n, || stop_flag.load(Ordering::SeqCst), || {})
+                });
                 if let Err(e) = held {
                     // The stream ends early: a test that meant to stop it
                     // sees it end instead, and fails.

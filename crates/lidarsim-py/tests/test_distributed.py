@@ -204,10 +204,11 @@ def test_parts_from_python_merge_and_bad_merges_are_refused(tmp_path):
     for k, d in zip((2, 3, 1), (dirs[1], dirs[2], dirs[0])):
         record = s.run_part(d, k, 3, threads=1)
         assert record["complete"] and record["part"] == k and record["parts"] == 3
-    with pytest.raises(OSError, match="part 2/3 is missing"):
+    with pytest.raises(lidarsim.PartError, match="part 2/3 is missing"):
         lidarsim.merge([dirs[0], dirs[2]], tmp_path / "bad")
-    with pytest.raises(OSError, match="given twice"):
+    with pytest.raises(lidarsim.PartError, match="given twice") as e:
         lidarsim.merge([dirs[0], dirs[1], dirs[1], dirs[2]], tmp_path / "bad2")
+    assert e.value.path == str(dirs[1])
     lidarsim.merge([dirs[2], dirs[0], dirs[1]], tmp_path / "merged")
     assert_same_run(tmp_path / "whole", tmp_path / "merged")
     with pytest.raises(ValueError, match="K must be from 1 to N"):
@@ -233,12 +234,13 @@ def test_a_merge_uses_the_built_world_of_the_parts_survey_and_no_other(tmp_path)
         s.run_part(d, k, 2, threads=1)
     other_seed = shed_survey(tmp_path / "other.obj", seed=30)
     other_seed.build()
-    # With the scene's file gone, a merge that reads the scene again fails:
-    # one given no survey, a survey of another seed, or the parts' survey
-    # with no world built.
+    # With the scene's file gone, a merge that reads the scene again fails
+    # as building the parts' survey fails (its key, file and line): one
+    # given no survey, a survey of another seed, or the parts' survey with
+    # no world built.
     shed.unlink()
     for i, given in enumerate([None, other_seed, not_built]):
-        with pytest.raises(OSError, match="shed.obj"):
+        with pytest.raises(lidarsim.SurveyError, match="shed.obj"):
             lidarsim.merge(dirs, tmp_path / f"bad{i}", survey=given)
     lidarsim.merge(dirs, tmp_path / "merged", survey=s)
     assert_same_run(tmp_path / "whole", tmp_path / "merged")

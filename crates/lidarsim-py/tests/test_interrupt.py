@@ -58,7 +58,9 @@ CHILD = textwrap.dedent(
         print("finished", flush=True)
     except KeyboardInterrupt:
         print("interrupted", flush=True)
-    # The interpreter goes on: a small run works.
+    # The interpreter goes on: a small run works (without the hold).
+    import os
+    os.environ.pop("LIDARSIM_TEST_HOLD_AT_PULSE")
     small = survey.replace({"flight_line": [{"start_m": [0.0, 0.0, 500.0],
                                              "end_m": [0.0, 60.0, 500.0], "speed_mps": 60.0}]})
     print("after", len(small.run(progress=False).points), flush=True)

@@ -14,8 +14,8 @@ use std::io::{BufReader, Read, Write};
 use std::path::Path;
 
 use super::{
-    AtFile, AtomicFile, PointRecord, PointSink, WaveformBlock, WaveformPacket, WriteCause,
-    WriteError,
+    AtFile, AtomicFile, Component, NO_OBJECT, PointRecord, PointSink, WaveformBlock,
+    WaveformPacket, WriteCause, WriteError,
 };
 use crate::geometry::DVec3;
 
@@ -124,9 +124,9 @@ pub(crate) fn encode(p: &PointRecord, b: &mut Vec<u8>) {
     b.push(p.classification);
     b.extend_from_slice(&p.point_source_id.to_le_bytes());
     b.extend_from_slice(&p.pulse_index.to_le_bytes());
-    b.extend_from_slice(&p.object_id.to_le_bytes());
+    b.extend_from_slice(&p.object_code().to_le_bytes());
     f64s(b, &[p.incidence_angle_deg.unwrap_or(0.0), p.echo_time_ps]);
-    b.extend_from_slice(&[p.component, p.channel]);
+    b.extend_from_slice(&[p.component.code(), p.channel]);
 }
 
 /// Reads a little-endian value from the front of a slice.
@@ -172,9 +172,11 @@ pub(crate) fn decode(bytes: &[u8]) -> PointRecord {
     let classification = c.u8();
     let point_source_id = c.u16();
     let pulse_index = c.u64();
-    let object_id = c.u32();
+    let object_id = Some(c.u32()).filter(|&id| id != NO_OBJECT);
     let (incidence, echo_time_ps) = (c.f64(), c.f64());
-    let (component, channel) = (c.u8(), c.u8());
+    // A part's records are checked against the CRC its run recorded
+    // before they are read: a code is one `encode` wrote.
+    let (component, channel) = (Component::from_code(c.u8()).unwrap_or_default(), c.u8());
     PointRecord {
         position_m,
         gps_time_s,
@@ -298,10 +300,10 @@ mod tests {
             classification: 5,
             point_source_id: 7,
             pulse_index: u64::MAX - 1,
-            object_id: 4_000_000_000,
+            object_id: Some(4_000_000_000),
             incidence_angle_deg: None,
             echo_time_ps: 3.3e6,
-            component: 1,
+            component: Component::Foliage,
             channel: 2,
         };
         let q = PointRecord {

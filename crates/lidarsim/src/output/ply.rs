@@ -167,7 +167,7 @@ impl PointSink for PlyWriter {
                 p.return_number,
                 p.number_of_returns,
                 p.classification,
-                p.component,
+                p.component.code(),
             ]);
             self.buf.extend_from_slice(&p.point_source_id.to_le_bytes());
             for v in [
@@ -179,7 +179,7 @@ impl PointSink for PlyWriter {
             ] {
                 self.buf.extend_from_slice(&(v as f32).to_le_bytes());
             }
-            self.buf.extend_from_slice(&p.object_id.to_le_bytes());
+            self.buf.extend_from_slice(&p.object_code().to_le_bytes());
             self.count += 1;
         }
         let path = self.file.path().to_path_buf();

@@ -76,7 +76,7 @@ impl PointSink for XyzWriter {
             fixed(b, p.amplitude, 6);
             fixed(b, p.echo_width_ns, 3);
             fixed(b, p.range_m, 4);
-            integer(b, u64::from(p.component));
+            integer(b, u64::from(p.component.code()));
             b.push(b'\n');
         }
         if let Err(e) = self.file.writer().write_all(&self.block) {

@@ -41,13 +41,6 @@ pub use truth::ReturnSource;
 /// ASPRS class of an echo no surface contributed to (receiver noise).
 pub const NOISE_CLASS: u8 = 7;
 
-/// [`PointRecord::component`] of an echo from a surface.
-pub const COMPONENT_SURFACE: u8 = 0;
-/// [`PointRecord::component`] of an echo from foliage in a crown.
-pub const COMPONENT_FOLIAGE: u8 = 1;
-/// [`PointRecord::component`] of an echo from a trunk.
-pub const COMPONENT_TRUNK: u8 = 2;
-
 /// Pulses per parallel work unit.
 pub const BLOCK_PULSES: u64 = 2048;
 

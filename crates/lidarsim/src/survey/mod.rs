@@ -35,7 +35,7 @@ use crate::scene::Material;
 use crate::sensor::channel::Channel;
 use crate::sensor::deflector::Deflector;
 use crate::sensor::navigation::NavigationErrors;
-use crate::sensor::platform::{FlightLine, SwayConfig};
+use crate::sensor::platform::{DriftConfig, FlightLine, SwayConfig};
 use crate::waveform::ReceiverConfig;
 use check::Checker;
 use diagnostic::{Diagnose, diagnostics_in_file_order};
@@ -193,8 +193,8 @@ pub struct Survey {
     pub sway: Option<SwayConfig>,
     /// Time between the end of one line and the start of the next, s.
     pub turn_time_s: f64,
-    /// Peak lateral and vertical drift, m, and its period, s.
-    pub drift: Option<([f64; 2], f64)>,
+    /// Turbulence drift when it is on.
+    pub drift: Option<DriftConfig>,
     /// Where the flight lines come from.
     pub line_spec: LineSpec,
     /// How sub-rays march through tree crowns.

@@ -7,7 +7,7 @@
 //! (two-sample Kolmogorov–Smirnov test), each at the 0.1 % level.
 
 use lidarsim::Survey;
-use lidarsim::output::PointRecord;
+use lidarsim::output::{Component, PointRecord};
 use lidarsim::sim::simulate_world_to_memory;
 use lidarsim::world::World;
 
@@ -81,7 +81,7 @@ fn figures(points: &[PointRecord]) -> Figures {
         if first.position_m.z > 2.0 {
             f.first.1 += 1;
         }
-        if first.component != 0 && first.classification != GROUND {
+        if first.component != Component::Surface && first.classification != GROUND {
             f.under_canopy.0 += 1;
             if pulse.iter().any(|p| p.classification == GROUND) {
                 f.under_canopy.1 += 1;

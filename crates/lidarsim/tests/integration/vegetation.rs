@@ -4,9 +4,10 @@
 use lidarsim::Survey;
 use lidarsim::accel::{BruteForce, Bvh, RayCaster};
 use lidarsim::geometry::{DVec3, Ray};
+use lidarsim::output::Component;
 use lidarsim::output::PointRecord;
 use lidarsim::scene::{Shape, Species};
-use lidarsim::sim::{COMPONENT_FOLIAGE, COMPONENT_TRUNK, simulate_world_to_memory};
+use lidarsim::sim::simulate_world_to_memory;
 use lidarsim::world::World;
 
 /// A survey and its world.
@@ -89,7 +90,7 @@ fn a_pulse_through_a_crown_gives_several_echoes() {
     );
     // The first echo comes from the crown, well above the ground.
     for p in &pulses {
-        assert_eq!(p[0].component, COMPONENT_FOLIAGE);
+        assert_eq!(p[0].component, Component::Foliage);
         assert!(p[0].position_m.z > 10.0);
         assert_eq!(p[0].classification, 5); // high vegetation
     }
@@ -184,7 +185,7 @@ seed = 4
     let footprint_radius = 1.87 * 0.5 * 500.0 * 0.5e-3;
     let mut foliage = 0;
     for p in &points {
-        if p.component != COMPONENT_FOLIAGE {
+        if p.component != Component::Foliage {
             continue;
         }
         foliage += 1;
@@ -254,7 +255,7 @@ fn a_broad_trunk_hides_the_ground() {
     let points = simulate(&s);
     assert_eq!(points.len() as u64, s.pulses());
     for p in &points {
-        assert_eq!(p.component, COMPONENT_TRUNK);
+        assert_eq!(p.component, Component::Trunk);
         assert_eq!(p.number_of_returns, 1);
         // The cone's radius is 0.5 m at 20 − 0.5/0.0802 = 13.8 m; the
         // 15 cm footprint spans about ±0.9 m of height on its steep side.
@@ -286,7 +287,7 @@ fn energies(s: &Case) -> (f64, f64) {
         .sum();
     let foliage: f64 = points
         .iter()
-        .filter(|p| p.component == COMPONENT_FOLIAGE)
+        .filter(|p| p.component == Component::Foliage)
         .map(|p| scaled(&p))
         .sum();
     (ground / n, foliage / n)
@@ -442,8 +443,8 @@ fn first_return_cover_holds_from_500_to_2000_m() {
             first.iter().filter(|p| p.position_m.z > 2.0).count() as f64 / first.len() as f64;
         let seen: std::collections::BTreeSet<u32> = points
             .iter()
-            .filter(|p| p.component != 0)
-            .map(|p| p.object_id)
+            .filter(|p| p.component != Component::Surface)
+            .filter_map(|p| p.object_id)
             .collect();
         let share = trees.iter().filter(|t| seen.contains(t)).count() as f64 / trees.len() as f64;
         println!("H {h} m: first-return cover {cover:.3}, trees with a point {share:.3}");

@@ -457,7 +457,7 @@ impl LasWriter {
                 | (u8::from(p.scan_direction_positive) << 6)
                 | (u8::from(p.edge_of_flight_line) << 7);
             rec[16] = p.classification;
-            rec[17] = p.component; // user data: what returned the echo
+            rec[17] = p.component.code(); // user data: what returned the echo
             // Scan angle in 0.006° increments, −30 000 … +30 000.
             let sa = scan_angle_units(p.scan_angle_deg);
             rec[18..20].copy_from_slice(&sa.to_le_bytes());
@@ -508,7 +508,7 @@ impl LasWriter {
                 {
                     extra[4 * i..4 * i + 4].copy_from_slice(&(v as f32).to_le_bytes());
                 }
-                extra[16..20].copy_from_slice(&p.object_id.to_le_bytes());
+                extra[16..20].copy_from_slice(&p.object_code().to_le_bytes());
                 self.buf.extend_from_slice(&extra);
             }
             if self.settings.error_extra_bytes {

@@ -2,7 +2,7 @@
 //! lines.
 
 use super::Checker;
-use crate::sensor::platform::SwayConfig;
+use crate::sensor::platform::{DriftConfig, SwayConfig};
 use crate::survey::platform_preset::{self, PlatformPresetUse};
 use crate::survey::{KeyPath, MAX_SWAY_FREQUENCIES, RawSurvey};
 
@@ -10,8 +10,8 @@ use crate::survey::{KeyPath, MAX_SWAY_FREQUENCIES, RawSurvey};
 pub(crate) struct Platform {
     pub sway: Option<SwayConfig>,
     pub turn_time_s: f64,
-    /// Peak lateral and vertical drift, m, and its period, s.
-    pub drift: Option<([f64; 2], f64)>,
+    /// Turbulence drift when it is on.
+    pub drift: Option<DriftConfig>,
     /// The platform preset and the keys it set.
     pub preset: Option<PlatformPresetUse>,
 }
@@ -121,7 +121,10 @@ pub(crate) fn platform(c: &mut Checker, raw: &RawSurvey) -> Platform {
     Platform {
         sway,
         turn_time_s,
-        drift: drift.map(|d| (d, drift_period_s)),
+        drift: drift.map(|amplitude_m| DriftConfig {
+            amplitude_m,
+            period_s: drift_period_s,
+        }),
         preset,
     }
 }
