@@ -1,6 +1,6 @@
 //! `[scanner]`'s deflector keys: which kind, and the keys of that kind.
 
-use super::Checker;
+use super::{Bounds, Checker};
 use crate::message::num;
 use crate::sensor::deflector::risley::Prism;
 use crate::sensor::deflector::{Deflector, Fibre, Mirror, MirrorProfile, Palmer, Polygon, Risley};
@@ -268,7 +268,7 @@ fn scan_angle(c: &mut Checker, key: KeyPath, value: Option<f64>, widest: f64) ->
         }
         other => other,
     };
-    c.number(key, given, 20.0, 0.0, false, widest, "°")
+    c.number(key, given, 20.0, Bounds::between(0.0, widest, "°"))
 }
 
 /// The Risley prisms: two or three, deviations adding up to less than 89°.
@@ -302,7 +302,12 @@ fn risley(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f64) -> Risley 
     }
     let mut prisms = Vec::new();
     for (i, (&d, &f)) in devs.iter().zip(rots).enumerate() {
-        let d = c.number(dev_key.index(i), Some(d), 10.0, 0.0, true, 45.0, "°");
+        let d = c.number(
+            dev_key.index(i),
+            Some(d),
+            10.0,
+            Bounds::above(0.0, "°").at_most(45.0),
+        );
         if !f.is_finite() || f == 0.0 || f.abs() > prf_hz / 8.0 {
             c.err(
                 rot_key.index(i),

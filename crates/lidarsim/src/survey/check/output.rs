@@ -1,7 +1,7 @@
 //! `[output]`: the formats, the time base, the coordinate resolution and
 //! reference system, the offset to projected coordinates.
 
-use super::Checker;
+use super::{Bounds, Checker};
 use crate::geometry::DVec3;
 use crate::survey::raw::RawOutput;
 use crate::survey::{Formats, KeyPath, Layout, OutputSettings, RawSurvey};
@@ -29,30 +29,21 @@ pub(crate) fn output(c: &mut Checker, raw: &RawSurvey) -> OutputSettings {
         op.key("trajectory_interval_s"),
         o.trajectory_interval_s,
         0.001,
-        1e-4,
-        false,
-        3600.0,
-        " s",
+        Bounds::between(1e-4, 3600.0, " s"),
     );
     let gps_start_time_s = o.gps_start_time_s.map(|g| {
         c.number(
             op.key("gps_start_time_s"),
             Some(g),
             0.0,
-            0.0,
-            false,
-            1e10,
-            " s",
+            Bounds::between(0.0, 1e10, " s"),
         )
     });
     let las_scale_m = c.number(
         op.key("las_scale_m"),
         o.las_scale_m,
         0.001,
-        0.0,
-        true,
-        1.0,
-        " m",
+        Bounds::above(0.0, " m").at_most(1.0),
     );
     let layout = layout(c, o, &op, &formats);
     OutputSettings {
@@ -224,7 +215,12 @@ fn layout(c: &mut Checker, o: &RawOutput, op: &KeyPath, formats: &Formats) -> La
                         "is required with layout = \"tiles\"".to_string(),
                     );
                 }
-                Layout::Tiles(c.number(op.key("tile_m"), o.tile_m, 1000.0, 1.0, false, 1e6, " m"))
+                Layout::Tiles(c.number(
+                    op.key("tile_m"),
+                    o.tile_m,
+                    1000.0,
+                    Bounds::between(1.0, 1e6, " m"),
+                ))
             }
         }
         Some(other) => {

@@ -1,7 +1,7 @@
 //! `[scanner]` and `[receiver]`: the laser, the deflector, the beam, the
 //! waveform's sampling and noise, and echo detection.
 
-use super::Checker;
+use super::{Bounds, Checker};
 use crate::detection::{DetectorConfig, EchoDetection, ReturnSelection};
 use crate::message::num;
 use crate::survey::preset::{self, PresetUse};
@@ -183,10 +183,7 @@ fn pulse(c: &mut Checker, s: &RawScanner, sp: &KeyPath) -> Pulse {
             sp.key("pulse_fwhm_ns"),
             other,
             4.0,
-            0.0,
-            true,
-            1000.0,
-            " ns",
+            Bounds::above(0.0, " ns").at_most(1000.0),
         )),
     };
     let ok = pulse_fwhm_ns.is_some();
@@ -275,28 +272,19 @@ fn ranges(c: &mut Checker, s: &RawScanner, sp: &KeyPath, detection: EchoDetectio
             EchoDetection::Discrete => DEFAULT_DEAD_ZONE_M,
             EchoDetection::Waveform => 0.0,
         },
-        0.0,
-        false,
-        100.0,
-        " m",
+        Bounds::between(0.0, 100.0, " m"),
     );
     let min_range_m = c.number(
         sp.key("min_range_m"),
         s.min_range_m,
         1.0,
-        0.0,
-        false,
-        f64::INFINITY,
-        " m",
+        Bounds::at_least(0.0, " m"),
     );
     let max_range_m = c.number(
         sp.key("max_range_m"),
         s.max_range_m,
         10_000.0,
-        0.0,
-        true,
-        MAX_RANGE_M,
-        " m",
+        Bounds::above(0.0, " m").at_most(MAX_RANGE_M),
     );
     if max_range_m <= min_range_m {
         c.err(
@@ -311,10 +299,7 @@ fn ranges(c: &mut Checker, s: &RawScanner, sp: &KeyPath, detection: EchoDetectio
         sp.key("reference_range_m"),
         s.reference_range_m,
         1000.0,
-        1.0,
-        false,
-        MAX_RANGE_M,
-        " m",
+        Bounds::between(1.0, MAX_RANGE_M, " m"),
     );
     Ranges {
         min_separation_m,
@@ -337,12 +322,22 @@ struct Receiver {
 
 /// `[receiver]`'s numbers, each in its range (`rp`).
 fn receiver(c: &mut Checker, r: &RawReceiver, rp: &KeyPath) -> Receiver {
-    let bin_ps = c.number(rp.key("bin_ps"), r.bin_ps, 500.0, 0.0, true, 1e6, " ps");
+    let bin_ps = c.number(
+        rp.key("bin_ps"),
+        r.bin_ps,
+        500.0,
+        Bounds::above(0.0, " ps").at_most(1e6),
+    );
     // Amplitudes are in units of the echo of a white plane filling the
     // beam at the reference range: a noise or path radiance above it
     // would hide every echo.
-    let noise = c.number(rp.key("noise"), r.noise, 0.0, 0.0, false, 1.0, "");
-    let atmosphere = c.number(rp.key("atmosphere"), r.atmosphere, 0.0, 0.0, false, 1.0, "");
+    let noise = c.number(rp.key("noise"), r.noise, 0.0, Bounds::between(0.0, 1.0, ""));
+    let atmosphere = c.number(
+        rp.key("atmosphere"),
+        r.atmosphere,
+        0.0,
+        Bounds::between(0.0, 1.0, ""),
+    );
     Receiver {
         bin_ps,
         noise,
