@@ -98,7 +98,7 @@ pub fn check_part_number(k: usize, n: usize) -> Result<(), String> {
 
 /// Whether `name` (relative to a part's directory) is a file a part run
 /// writes: its record, points, report state, survey, the output marker or
-/// a scene data file under [`outdir::DATA_DIR`].
+/// a scene data file under [`super::names::DATA_DIR`].
 pub fn is_part_file(name: &str) -> bool {
     match name.split_once('/') {
         Some((dir, file)) => dir == super::names::DATA_DIR && super::names::is_data_file(file),

@@ -515,7 +515,7 @@ pub struct RunOutcome {
 
 /// Simulates a whole survey into memory on `threads` threads: its world
 /// built, every pulse, the points in pulse order. For tests and small
-/// surveys; [`crate::run::run_to_dir`] streams to files instead.
+/// surveys; [`crate::run::run`] streams to files instead.
 pub fn simulate_to_memory(
     survey: &Survey,
     threads: usize,
