@@ -4,7 +4,7 @@
 Usage: make_geotiff_fixtures.py OUTDIR
 
 The files are committed as crates/lidarsim/tests/data/*.tif (run this
-script with that folder to regenerate them); tests/terrain.rs states the
+script with that folder to regenerate them); tests/integration/terrain.rs states the
 same parameters and checks what lidarsim reads from them.
 
 - dem_area.tif: float32, 40 x 24 pixels of 10 m x 5 m, upper-left corner
