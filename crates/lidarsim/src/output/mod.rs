@@ -26,7 +26,7 @@ pub use las::{
     WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN, return_numbers, scan_angle_units,
 };
 pub use ply::{PLY_PROPERTIES, PLY_RECORD_LEN, PlyWriter};
-pub use xyz::XyzWriter;
+pub use xyz::{XYZ_COLUMNS, XyzWriter, push_xyz_lines};
 
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
