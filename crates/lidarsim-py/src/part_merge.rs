@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex};
 
 use lidarsim::run::merge::{Merge, Parts, merge_over};
 use lidarsim::{Survey, World};
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
 use crate::run::{DirOptions, check_threads, watched};
@@ -61,7 +61,7 @@ impl PartMerge {
     fn new(py: Python<'_>, out_dir: PathBuf, overwrite: bool, take_parts: bool) -> PyResult<Self> {
         let merge = py
             .detach(|| Merge::begin(&out_dir, overwrite, taken(take_parts)))
-            .map_err(|e| PyOSError::new_err(e.to_string()))?;
+            .map_err(crate::run::os_error)?;
         Ok(Self {
             merge: Mutex::new(Some(merge)),
         })
@@ -80,7 +80,7 @@ impl PartMerge {
         })
         .map_err(|e| match e {
             Added::Finished => finished(),
-            Added::Refused(e) => PyOSError::new_err(e.to_string()),
+            Added::Refused(e) => crate::run::os_error(e),
         })
     }
 

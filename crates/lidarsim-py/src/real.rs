@@ -23,7 +23,7 @@ use crate::convert::json_to_py;
 /// `ValueError`s.
 fn twin_error(e: TwinError) -> PyErr {
     match e {
-        TwinError::Scan(_) | TwinError::Write { .. } => PyOSError::new_err(e.to_string()),
+        TwinError::Scan(_) | TwinError::Write { .. } => crate::run::os_error(e),
         _ => PyValueError::new_err(e.to_string()),
     }
 }
@@ -200,7 +200,7 @@ pub fn compare<'py>(
             compare_clouds(&a, &b, &options).map_err(|e| PyValueError::new_err(e.to_string()))?;
         if let Some(dir) = &out_dir {
             write_comparison(&c, dir, overwrite)
-                .map_err(|(p, e)| PyOSError::new_err(format!("{}: {e}", p.display())))?;
+                .map_err(|(p, e)| crate::run::os_error(format!("{}: {e}", p.display())))?;
         }
         let json = serde_json::to_string(&c).map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok::<_, PyErr>((json, table::text(&c)))

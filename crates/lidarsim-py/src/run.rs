@@ -114,6 +114,22 @@ pub fn check_threads(threads: usize) -> PyResult<()> {
     Ok(())
 }
 
+/// A message of the library in Python's words: the command line's flags
+/// named as the keyword arguments that set them (issue 49: a run into a
+/// non-empty folder said "pass --overwrite" to a Python user).
+pub(crate) fn in_python_words(message: &str) -> String {
+    message
+        .replace("--overwrite (overwrite=True in Python)", "overwrite=True")
+        .replace("--no-space-check (no_space_check)", "no_space_check=True")
+        .replace("--overwrite", "overwrite=True")
+        .replace("--no-space-check", "no_space_check=True")
+}
+
+/// An `OSError` with the library's message in Python's words.
+pub(crate) fn os_error(e: impl std::fmt::Display) -> PyErr {
+    PyOSError::new_err(in_python_words(&e.to_string()))
+}
+
 fn bytes_array(py: Python<'_>, bytes: Vec<u8>) -> Bound<'_, PyArray1<u8>> {
     PyArray1::from_vec(py, bytes)
 }
@@ -156,7 +172,7 @@ pub fn run<'py>(
     if let Some(e) = watch.take_error() {
         return Err(e);
     }
-    let (bytes, outcome, wall_time_s) = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
+    let (bytes, outcome, wall_time_s) = result.map_err(os_error)?;
     let plan = lidarsim::plan::plan(survey, &world);
     let warnings = lidarsim::plan::warnings(survey, &world, &plan);
     let measured = Measured {
@@ -225,7 +241,7 @@ where
     if let Some(e) = watch.take_error() {
         return Err(e);
     }
-    let value = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
+    let value = result.map_err(os_error)?;
     let text = serde_json::to_string(&value)
         .map_err(|e| PyValueError::new_err(format!("cannot write the result: {e}")))?;
     json_to_py(py, &text)
