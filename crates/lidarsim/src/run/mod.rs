@@ -453,7 +453,9 @@ fn execute_in<'scope>(
     };
     files.extend(TRAJECTORY_FILES.iter().map(|(name, _)| name.to_string()));
 
-    let mut report = ReportSink::new(covered_area(world, &plan), plan.point_density_per_m2);
+    let area = covered_area(world, &plan);
+    let mut report = ReportSink::new(area, plan.point_density_per_m2)
+        .through(crate::report::section_y(world, area));
     let mut before = RunCounts::default();
     let mut start = PulsePosition::default();
     let mut wall_before = 0.0;

@@ -219,7 +219,9 @@ pub fn run_part(
     };
     let mut report = stitch.then(|| {
         let plan = crate::plan::plan(survey, world);
-        ReportSink::new(super::covered_area(world, &plan), plan.point_density_per_m2)
+        let area = super::covered_area(world, &plan);
+        ReportSink::new(area, plan.point_density_per_m2)
+            .through(crate::report::section_y(world, area))
     });
     let control = RunControl {
         stop: options.stop,
