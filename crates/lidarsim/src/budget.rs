@@ -164,18 +164,45 @@ fn sample(survey: &Survey, world: &World) -> Sample {
     s
 }
 
-/// Bytes of a trajectory file of `lines`: its rows formatted one by one
-/// (the flown trajectory's; the observed one's differ by a sign here and
-/// there).
+/// Rows of each flight line's trajectory formatted for the estimate, at
+/// most (the others are taken as long as these on average).
+const TRAJECTORY_SAMPLE_ROWS: u64 = 1024;
+
+/// Bytes of a trajectory file of `lines`: of each line, up to
+/// [`TRAJECTORY_SAMPLE_ROWS`] of its rows spread over it formatted as the
+/// writer formats them, scaled to all its rows (the flown trajectory's;
+/// the observed one's differ by a sign here and there). Exact for lines of
+/// no more rows; a day-long line is not listed row by row.
 fn trajectory_bytes(survey: &Survey, lines: &[FlightLine]) -> u64 {
+    let o = &survey.output;
+    let (offset, dt) = (o.gps_start_time_s.unwrap_or(0.0), o.trajectory_interval_s);
     let mut row = Vec::with_capacity(128);
-    let mut bytes = crate::files::TRAJECTORY_HEADER.len() as u64;
-    for r in crate::files::trajectory_rows(survey, lines, false) {
-        row.clear();
-        r.push_csv(&mut row);
-        bytes += row.len() as u64;
+    let mut bytes = crate::files::TRAJECTORY_HEADER.len() as f64;
+    for line in lines {
+        let rows = (line.duration_s() / dt).floor() as u64 + 1;
+        let taken = rows.min(TRAJECTORY_SAMPLE_ROWS);
+        let mut sampled = 0u64;
+        for i in 0..taken {
+            let j = i * rows / taken;
+            let t = j as f64 * dt;
+            let p = line.pose_at(t);
+            row.clear();
+            crate::files::TrajectoryRow {
+                gps_time_s: offset + line.start_time_s + t,
+                position_m: p.position_m + o.offset_m,
+                attitude_deg: [
+                    p.attitude.roll_rad.to_degrees(),
+                    p.attitude.pitch_rad.to_degrees(),
+                    p.attitude.yaw_rad.to_degrees(),
+                ],
+                line: line.index + 1,
+            }
+            .push_csv(&mut row);
+            sampled += row.len() as u64;
+        }
+        bytes += sampled as f64 * rows as f64 / taken.max(1) as f64;
     }
-    bytes
+    bytes.round() as u64
 }
 
 /// The most bytes `report.html` takes: its maps (height, intensity, class
