@@ -2,7 +2,8 @@
 # The whole test suite, as CI runs it (.ci/run calls this script).
 # Needs only the Rust toolchain and python3; the Python packages of the
 # independent LAS check and of the lidarsim package's tests are installed
-# into target/pyenv by check_las.sh and check_python.sh.
+# into target/pyenv by check_las.sh and check_python.sh, and Chromium (for
+# the report's browser check) from Debian's packages by install_chromium.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 # Each step's heading says how long the suite has run so far.
@@ -29,6 +30,10 @@ CARGO_TARGET_DIR=target/portable RUSTFLAGS="-C target-cpu=x86-64" \
   cargo build --quiet --release -p lidarsim-cli
 step "demo + independent LAS check (laspy)"
 scripts/check_las.sh
+step "README.md's demo figures match the demo's summary and files"
+python3 scripts/readme_figures.py target/demo-check --check
+step "docs/img pictures by scripts/make_images.sh; the report in headless Chromium, no blank panel"
+scripts/make_images.sh target/images-check
 step "the Python package: wheel (maturin) and its tests (pytest)"
 scripts/check_python.sh
 step "the scalar kernels write the same bytes as the AVX2 kernels"

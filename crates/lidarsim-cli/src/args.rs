@@ -298,9 +298,10 @@ pub struct WaveformArgs {
     /// survey plus output.offset_m); horizontal distance without Z.
     #[arg(long, value_name = "X,Y[,Z]", allow_hyphen_values = true)]
     pub near: Option<String>,
-    /// Output PNG.
-    #[arg(short, long, default_value = "waveform.png")]
-    pub output: PathBuf,
+    /// Output PNG (default: DIR/waveform-line-L-pulse-N.png, beside the
+    /// run's files).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
 }
 
 /// The options of `lidarsim render`.
@@ -308,9 +309,10 @@ pub struct WaveformArgs {
 pub struct RenderArgs {
     /// The point cloud (LAS or LAZ).
     pub cloud: PathBuf,
-    /// Output PNG.
-    #[arg(short, long, default_value = "top.png")]
-    pub output: PathBuf,
+    /// Output PNG (default: beside the cloud, named after it, the view and
+    /// the colours: points-top-height.png, points-profile-class.png).
+    #[arg(short, long)]
+    pub output: Option<PathBuf>,
     /// Colours: height, intensity, class, return, strip or time (GPS time:
     /// the order in which the scanner drew its pattern).
     #[arg(long, default_value = "height")]

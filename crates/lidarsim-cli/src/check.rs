@@ -71,7 +71,16 @@ fn check(flight: &Flight, output: &Path) {
             say!("  set by the preset:  platform.{k}");
         }
     }
-    say!("pulses:               {}", p.pulses);
+    let slots: u64 = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
+    if p.pulses == slots {
+        say!("pulses:               {}", p.pulses);
+    } else {
+        say!(
+            "pulses:               {} (of {slots} pulse slots: the others fall where the \
+             deflector looks outside the field of view)",
+            p.pulses
+        );
+    }
     say!("flight time:          {} s", fixed(p.flight_time_s, 1));
     say!("swath width:          {} m", fixed(p.swath_width_m, 1));
     say!(
@@ -82,17 +91,23 @@ fn check(flight: &Flight, output: &Path) {
         "footprint diameter:   {} m at nadir",
         fixed(p.footprint_diameter_m, 3)
     );
-    if b.crown_cover > 0.0 {
-        say!(
-            "expected points:      ~{} (one per pulse, more under crowns: {} % of the area)",
-            b.points,
-            fixed(b.crown_cover * 100.0, 0)
-        );
+    let sample = if b.sampled_slots >= slots {
+        "every pulse simulated".to_string()
     } else {
-        say!("expected points:      ~{} (one per pulse)", b.points);
-    }
+        format!("a sample of {} pulse slots simulated", b.sampled_slots)
+    };
+    say!(
+        "expected points:      ~{} ({} per pulse slot, {sample})",
+        b.points,
+        fixed(b.points_per_slot, 2)
+    );
     for f in &b.files {
-        say!("  {:<24}~{}", f.name, human_bytes(f.bytes));
+        let size = human_bytes(f.bytes);
+        if f.at_most {
+            say!("  {:<24}at most {size}", f.name);
+        } else {
+            say!("  {:<24}~{size}", f.name);
+        }
     }
     match survey.output.layout {
         lidarsim::survey::Layout::Single => {}

@@ -14,8 +14,10 @@ pub fn pulse_bar(total: u64) -> ProgressBar {
         return ProgressBar::hidden();
     }
     let b = ProgressBar::new(total);
+    // `per_sec:0`: the rate in whole pulses (indicatif's default shows
+    // four decimals, "42,255.3096/s").
     if let Ok(style) = ProgressStyle::with_template(
-        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} pulses ({per_sec}, eta {eta})",
+        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} pulses ({per_sec:0}, eta {eta})",
     ) {
         b.set_style(style);
     }

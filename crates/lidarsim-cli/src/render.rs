@@ -16,6 +16,7 @@ pub fn command(args: RenderArgs) -> ExitCode {
         resolution,
         profile,
     } = args;
+    let output = output.unwrap_or_else(|| beside(&cloud, profile.is_some(), &color));
     match render(&cloud, &output, &color, resolution, profile.as_deref()) {
         Ok(()) => {
             say!("wrote {}", output.display());
@@ -23,6 +24,17 @@ pub fn command(args: RenderArgs) -> ExitCode {
         }
         Err((code, msg)) => fail(code, &msg),
     }
+}
+
+/// The picture's path when `-o` is not given: beside the cloud, named
+/// after it, the view and the colours (`points-top-height.png`), so that
+/// pictures of several clouds and views do not replace each other.
+fn beside(cloud: &Path, profile: bool, color: &str) -> std::path::PathBuf {
+    let stem = cloud
+        .file_stem()
+        .map_or_else(|| "cloud".into(), |s| s.to_string_lossy());
+    let view = if profile { "profile" } else { "top" };
+    cloud.with_file_name(format!("{stem}-{view}-{color}.png"))
 }
 
 /// Reads a LAS file and writes a top view or profile PNG. Errors carry the

@@ -1,7 +1,7 @@
 //! `lidarsim waveform`: one pulse of a run, named by line and number, by a
 //! point's GPS time or by a place, simulated again and plotted.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use lidarsim::message::{fixed, num};
@@ -22,7 +22,7 @@ pub fn command(args: WaveformArgs) -> ExitCode {
         near,
         output,
     } = args;
-    match waveform(&dir, pulse, line, gps_time, near.as_deref(), &output) {
+    match waveform(&dir, pulse, line, gps_time, near.as_deref(), output) {
         Ok(()) => ExitCode::SUCCESS,
         Err((code, msg)) => fail(code, &msg),
     }
@@ -139,7 +139,7 @@ fn waveform(
     line: u32,
     gps_time: Option<f64>,
     near: Option<&str>,
-    output: &Path,
+    output: Option<PathBuf>,
 ) -> Result<(), (u8, String)> {
     let survey_path = dir.join("survey.toml");
     let (survey, world) = load(&survey_path, None).map_err(|e| (2, e.to_string()))?;
@@ -224,6 +224,14 @@ fn waveform(
     }
     let sim = lidarsim::sim::Simulator::new(&survey, &world);
     let (plot, detail) = lidarsim::run::replay::pulse(&sim, line_ref, k);
+    // Without -o: beside the run's files, named after the pulse.
+    let output = output.unwrap_or_else(|| {
+        dir.join(format!(
+            "waveform-line-{}-pulse-{k}.png",
+            line_ref.index + 1
+        ))
+    });
+    let output = output.as_path();
     plot.render()
         .save_png(output)
         .map_err(|e| (1, format!("{}: {e}", output.display())))?;

@@ -107,7 +107,7 @@ pub fn survey_error(py: Python<'_>, e: &lidarsim::survey::SurveyError, keys_only
 /// The library's error as the exception of its kind (`keys_only`: the
 /// survey was given as a dict, see [`survey_error`]).
 pub fn to_py(py: Python<'_>, e: &Error, keys_only: bool) -> PyErr {
-    let message = e.to_string();
+    let message = in_python_words(&e.to_string());
     let err = match e {
         Error::Survey(s) => return survey_error(py, s, keys_only),
         Error::Input(_) => InputError::new_err(message),
@@ -125,7 +125,7 @@ pub fn to_py(py: Python<'_>, e: &Error, keys_only: bool) -> PyErr {
 /// interpreter's lock for the attribute, so it may be called without it).
 pub fn write_error(e: &WriteError) -> PyErr {
     Python::attach(|py| {
-        let err = OutputError::new_err(e.to_string());
+        let err = OutputError::new_err(in_python_words(&e.to_string()));
         set_path(py, &err, Some(&e.path));
         err
     })
@@ -143,4 +143,15 @@ pub fn point_error(cause: &WriteCause) -> PyErr {
 fn set_path(py: Python<'_>, err: &PyErr, path: Option<&std::path::Path>) {
     let path = path.map(|p| p.display().to_string());
     let _ = err.value(py).setattr("path", path.as_deref());
+}
+
+/// A message of the library in Python's words: the command line's flags
+/// named as the keyword arguments that set them (a run into a non-empty
+/// folder said "pass --overwrite" to a Python user).
+pub fn in_python_words(message: &str) -> String {
+    message
+        .replace("--overwrite (overwrite=True in Python)", "overwrite=True")
+        .replace("--no-space-check (no_space_check)", "no_space_check=True")
+        .replace("--overwrite", "overwrite=True")
+        .replace("--no-space-check", "no_space_check=True")
 }

@@ -105,3 +105,42 @@ def test_a_missing_file_is_reported_at_its_key_when_the_scene_is_built(small_dir
 def test_values_that_are_not_survey_values_are_refused():
     with pytest.raises(TypeError, match="scanner.prf_hz"):
         lidarsim.Survey.from_dict({"scanner": {"prf_hz": object()}})
+
+
+# A few pulses over a plane: enough for a run into a folder.
+TINY = """
+[scanner]
+prf_hz = 10000
+scan_angle_deg = 10
+subrays = 1
+[[flight_line]]
+start_m = [0.0, -5.0, 200.0]
+end_m = [0.0, 5.0, 200.0]
+speed_mps = 50.0
+[materials.grass]
+reflectance = 0.4
+[[polygon]]
+material = "grass"
+class = "ground"
+vertices_m = [[-100, -100, 0], [100, -100, 0], [100, 100, 0], [-100, 100, 0]]
+"""
+
+
+def test_a_run_into_a_foreign_folder_names_the_keyword_that_allows_it(tmp_path):
+    # Issue 49: the message said "pass --overwrite" to a Python user.
+    (tmp_path / "notes.txt").write_text("mine")
+    s = lidarsim.Survey.from_toml(TINY)
+    with pytest.raises(OSError) as e:
+        s.run_to(tmp_path, progress=False)
+    assert "overwrite=True" in str(e.value) and "--overwrite" not in str(e.value)
+    s.run_to(tmp_path, progress=False, overwrite=True)
+    assert (tmp_path / "notes.txt").read_text() == "mine"
+
+
+def test_to_laspy_without_laspy_says_how_to_install_it(monkeypatch):
+    # Issue 49: a bare ModuleNotFoundError. A None in sys.modules makes the
+    # import fail as it does where laspy is not installed.
+    result = lidarsim.Survey.from_toml(TINY).run(progress=False)
+    monkeypatch.setitem(sys.modules, "laspy", None)
+    with pytest.raises(ModuleNotFoundError, match="pip install laspy"):
+        result.to_laspy()

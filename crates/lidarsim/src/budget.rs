@@ -1,43 +1,56 @@
 //! What a run will cost before it runs: the size of every file it writes
 //! and the memory it needs, and whether the machine has them.
 //!
-//! Points are estimated as one per pulse that can reach the scene (the
-//! pulses emitted while the line's swath overlaps the scene's extent),
-//! plus an allowance for multiple returns under crowns:
-//! [`EXTRA_RETURNS_UNDER_CROWNS`] more per pulse over the share of the
-//! scene's area that crowns cover (at most `max_returns − 1`). Pulses over
-//! the scene that find nothing (gaps between objects) are counted, so the
-//! estimate errs on the large side. File sizes follow from the points and
-//! each format's record; memory from the scene as loaded, its index, the
-//! per-thread buffers of the receiver and the sinks' buffers.
+//! Points, waveform samples and text bytes are measured on a sample of the
+//! survey's own pulses ([`SAMPLE_SLOTS`] pulse slots in [`STRETCH`]-slot
+//! stretches spread over the whole flight, one stretch at a varying place
+//! in each equal share of it), simulated exactly as the run will simulate
+//! them, and scaled to every pulse slot: the estimate follows whatever the
+//! physics gives (a canopy's extra returns, pulses that miss the scene),
+//! within a few per cent for surveys whose scene does not change abruptly
+//! between the stretches. A survey of at most that many slots is
+//! simulated whole, and its estimate is exact. LAS and PLY sizes follow
+//! exactly from the points; LAZ is taken as two fifths of the LAS file;
+//! the trajectories are formatted row by row; the report is bounded from
+//! above ([`FileEstimate::at_most`]). Memory follows from the scene as
+//! loaded, its index, the per-thread buffers of the receiver and the
+//! sinks' buffers.
 
 use std::path::Path;
 
 use serde::Serialize;
 
-use crate::geometry::Aabb;
-use crate::output::{WAVEFORM_BITS, WDP_HEADER_LEN};
+use crate::output::{WAVEFORM_BITS, WDP_HEADER_LEN, WaveformBlock};
 use crate::scene::{Scene, Shape};
+use crate::sensor::platform::FlightLine;
+use crate::sim::BlockJob;
 use crate::survey::Survey;
 use crate::waveform::range_to_bin;
 use crate::world::World;
 
-/// Extra returns per pulse allowed for where crowns cover the ground
-/// (foliage echoes at two depths before the ground echo: 2.28 points per
-/// pulse in `examples/forest.toml`, whose crowns cover 66 % of the area).
-pub const EXTRA_RETURNS_UNDER_CROWNS: f64 = 2.0;
+/// Pulse slots of the sample simulated to estimate a run (the whole
+/// survey when it has no more).
+pub const SAMPLE_SLOTS: u64 = 4096;
+
+/// Consecutive pulse slots of each stretch of the sample: short enough
+/// for many stretches, long enough to cover a scan pattern's neighbours.
+pub const STRETCH: u64 = 32;
 
 /// Bytes of index (bounding volume hierarchy) per primitive at its peak
 /// during the build: the binary tree, the primitives' boxes and centroids,
 /// and the eight-wide tree it is collapsed into.
 const INDEX_BYTES_PER_PRIMITIVE: u64 = 128;
 
-/// Bytes of a line of `points.xyz` besides its coordinates, times and
-/// ranges: the fixed-width columns and the separators.
-const XYZ_FIXED_BYTES: u64 = 60;
+/// Pixels of the report's maps at most (see `report::ReportSink`).
+const REPORT_MAP_PIXELS: f64 = 500_000.0;
 
-/// Bytes of the report page at most (maps of at most 500 000 pixels).
-const REPORT_BYTES: u64 = 8 << 20;
+/// Bytes of the report besides its maps at most: the text, the tables
+/// and the plots drawn as SVG.
+const REPORT_FIXED_BYTES: u64 = 1 << 20;
+
+/// Memory the report gathers while a run lasts at most, bytes (its
+/// maps' pixels and the cross-section's points).
+const REPORT_MEMORY: u64 = 8 << 20;
 
 /// Memory of the program itself and its allocator, bytes.
 const BASE_MEMORY: u64 = 16 << 20;
@@ -52,17 +65,22 @@ pub struct FileEstimate {
     pub name: String,
     /// Expected size, bytes.
     pub bytes: u64,
+    /// Whether `bytes` is an upper bound rather than an estimate (the
+    /// report, whose pictures compress by what they show).
+    pub at_most: bool,
 }
 
 /// The expected cost of a run.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Budget {
-    /// Pulses.
+    /// Pulses that fire.
     pub pulses: u64,
-    /// Expected points (see the module documentation).
+    /// Expected points: the sample's points per pulse slot times the slots.
     pub points: u64,
-    /// Share of the scene's area under crowns, 0–1.
-    pub crown_cover: f64,
+    /// Pulse slots simulated for the estimate.
+    pub sampled_slots: u64,
+    /// Points per pulse slot in the sample.
+    pub points_per_slot: f64,
     /// Point files per format: 1, or a file per flight line (strips) or
     /// per tile the lines may reach, at most (tiles).
     pub layout_files: u64,
@@ -74,35 +92,274 @@ pub struct Budget {
     pub memory_bytes: u64,
 }
 
-/// Number of decimal digits of the integer part of `v` (at least 1).
-fn digits(v: f64) -> u64 {
-    let mut n = 1;
-    let mut x = v.abs();
-    while x >= 10.0 && n < 400 {
-        x /= 10.0;
-        n += 1;
-    }
-    n
+/// What the sample of a survey's pulses gave.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+struct Sample {
+    /// Pulse slots simulated.
+    slots: u64,
+    /// Points they gave.
+    points: u64,
+    /// Waveform samples kept for the pulses with an echo.
+    waveform_samples: u64,
+    /// Pulses with an echo (a waveform record each).
+    waveforms: u64,
+    /// Bytes of their lines in `points.xyz`.
+    xyz_bytes: u64,
 }
 
-/// Share of the scene's horizontal extent that crown envelopes cover:
-/// `1 − exp(−CAI)` for the crown area index CAI (the summed areas of the
-/// crowns' largest circles over the extent), the cover of randomly placed
-/// overlapping discs (the Boolean model of stochastic geometry).
-fn crown_cover(scene: &Scene, b: Aabb) -> f64 {
-    if b.is_empty() {
-        return 0.0;
-    }
-    let area = (b.extent().x * b.extent().y).max(1.0);
-    let crowns: f64 = scene
-        .primitives
-        .iter()
-        .filter_map(|p| match &p.shape {
-            Shape::Crown(c) => Some(std::f64::consts::PI * c.max_radius_m().powi(2)),
-            _ => None,
+/// The stretches of the sample over `slots_per_line`: `(line, first slot,
+/// end)`. The slots of all lines, one line after the other, are cut into
+/// equal shares, one stretch in each, at a place that moves from share to
+/// share by the golden ratio (so that it does not keep the same phase of a
+/// periodic scan pattern).
+fn sample_stretches(slots_per_line: &[u64]) -> Vec<BlockJob> {
+    let total: u64 = slots_per_line.iter().sum();
+    let whole = |(line, &end): (usize, &u64)| {
+        (end > 0).then_some(BlockJob {
+            line,
+            start: 0,
+            end,
         })
-        .sum();
-    1.0 - (-crowns / area).exp()
+    };
+    if total <= SAMPLE_SLOTS {
+        return slots_per_line
+            .iter()
+            .enumerate()
+            .filter_map(whole)
+            .collect();
+    }
+    let count = SAMPLE_SLOTS / STRETCH;
+    let share = total as f64 / count as f64;
+    let golden = 0.618_033_988_749_894_9;
+    let mut out = Vec::with_capacity(count as usize);
+    for i in 0..count {
+        let room = (share - STRETCH as f64).max(0.0);
+        let at = (i as f64 * share + (i as f64 * golden).fract() * room) as u64;
+        // The global slot `at` in its line.
+        let (mut line, mut k) = (0, at.min(total - 1));
+        while k >= slots_per_line[line] {
+            k -= slots_per_line[line];
+            line += 1;
+        }
+        out.push(BlockJob {
+            line,
+            start: k,
+            end: (k + STRETCH).min(slots_per_line[line]),
+        });
+    }
+    out
+}
+
+/// Simulates the sample's stretches on the calling thread.
+fn sample(survey: &Survey, world: &World, line_pulses: &[u64]) -> Sample {
+    let lines = &world.lines[..];
+    let waveforms = survey.output.formats.las_waveform;
+    let sim = crate::sim::Simulator::new(survey, world).with_waveforms(waveforms);
+    let mut scratch = crate::sim::Scratch::default();
+    let (mut points, mut block, mut text) = (Vec::new(), WaveformBlock::default(), Vec::new());
+    let origin = survey.output.offset_m.to_array();
+    let mut s = Sample::default();
+    for job in sample_stretches(line_pulses) {
+        let record = waveforms.then_some(&mut block);
+        let line = &lines[job.line];
+        let counts = sim.simulate_block_recording(
+            line,
+            job.start,
+            job.end,
+            &mut scratch,
+            &mut points,
+            record,
+        );
+        s.slots += counts.pulse_slots;
+        s.points += counts.points;
+        s.waveforms += counts.pulses_with_echo;
+        s.waveform_samples += block.packets.iter().map(|p| p.len as u64).sum::<u64>();
+        text.clear();
+        crate::output::push_xyz_lines(&mut text, &points, origin);
+        s.xyz_bytes += text.len() as u64;
+    }
+    s
+}
+
+/// Rows of each flight line's trajectory formatted for the estimate, at
+/// most (the others are taken as long as these on average).
+const TRAJECTORY_SAMPLE_ROWS: u64 = 1024;
+
+/// Bytes of a trajectory file of `lines`: of each line, up to
+/// [`TRAJECTORY_SAMPLE_ROWS`] of its rows spread over it formatted as the
+/// writer formats them, scaled to all its rows (the flown trajectory's;
+/// the observed one's differ by a sign here and there). Exact for lines of
+/// no more rows; a day-long line is not listed row by row.
+fn trajectory_bytes(survey: &Survey, lines: &[FlightLine]) -> u64 {
+    let o = &survey.output;
+    let (offset, dt) = (o.gps_start_time_s.unwrap_or(0.0), o.trajectory_interval_s);
+    let mut row = Vec::with_capacity(128);
+    let mut bytes = crate::files::TRAJECTORY_HEADER.len() as f64;
+    for line in lines {
+        let rows = (line.duration_s() / dt).floor() as u64 + 1;
+        let taken = rows.min(TRAJECTORY_SAMPLE_ROWS);
+        let mut sampled = 0u64;
+        for i in 0..taken {
+            let j = i * rows / taken;
+            let t = j as f64 * dt;
+            let p = line.pose_at(t);
+            row.clear();
+            crate::files::TrajectoryRow {
+                gps_time_s: offset + line.start_time_s + t,
+                position_m: p.position_m + o.offset_m,
+                attitude_deg: [
+                    p.attitude.roll_rad.to_degrees(),
+                    p.attitude.pitch_rad.to_degrees(),
+                    p.attitude.yaw_rad.to_degrees(),
+                ],
+                line: line.index + 1,
+            }
+            .push_csv(&mut row);
+            sampled += row.len() as u64;
+        }
+        bytes += sampled as f64 * rows as f64 / taken.max(1) as f64;
+    }
+    bytes.round() as u64
+}
+
+/// The most bytes `report.html` takes: its maps (height, intensity, class
+/// and density, at most [`REPORT_MAP_PIXELS`] each, over the area the
+/// lines reach at about four points per pixel), stored as PNG in base64 no
+/// larger than their raw pixels, the cross-section, and the rest.
+fn report_bytes(survey: &Survey, world: &World, density_per_m2: f64) -> u64 {
+    let area = crate::world::reachable_area(survey, world.scene_bounds(), &world.lines);
+    let pixels = if area.is_empty() {
+        0.0
+    } else {
+        let res = (4.0 / density_per_m2.max(1e-6)).sqrt().max(0.05);
+        ((area.extent().x / res + 2.0) * (area.extent().y / res + 2.0)).min(REPORT_MAP_PIXELS)
+    };
+    let profile = 8192.0 * 300.0;
+    let base64 = 4.0 / 3.0;
+    ((4.0 * pixels + profile) * 3.0 * base64) as u64 + REPORT_FIXED_BYTES
+}
+
+/// Estimates the run of `survey` over `world` on `threads` threads (see
+/// the module documentation): a sample of its pulses is simulated on the
+/// calling thread.
+pub fn estimate(survey: &Survey, world: &World, line_pulses: &[u64], threads: usize) -> Budget {
+    let (scene, lines) = (world.scene(), &world.lines[..]);
+    let o = &survey.output;
+    let f = &o.formats;
+    let slots: u64 = line_pulses.iter().sum();
+    let plan = crate::plan::plan(survey, world);
+    let sample = sample(survey, world, line_pulses);
+    // Per pulse slot of the sample, times the survey's slots.
+    let scaled = |v: u64| (v as f64 * slots as f64 / sample.slots.max(1) as f64).round() as u64;
+    let points = scaled(sample.points);
+    let b = world.scene_bounds();
+    let mut files = Vec::new();
+    let mut add = |name: &str, bytes: u64, at_most: bool| {
+        files.push(FileEstimate {
+            name: name.to_string(),
+            bytes,
+            at_most,
+        })
+    };
+    let las = crate::files::las_settings_for(survey, b, lines);
+    let single = o.layout == crate::survey::Layout::Single;
+    // Strips and tiles: a file (its header and VLRs) per line or tile.
+    let layout_files = match o.layout {
+        crate::survey::Layout::Single => 1,
+        crate::survey::Layout::Strips => lines.len() as u64,
+        crate::survey::Layout::Tiles(tile_m) => {
+            crate::world::tiles_over(crate::world::reachable_area(survey, b, lines), tile_m) as u64
+        }
+    };
+    let headers = (layout_files - 1) * las.file_len(0);
+    if f.las {
+        let mut s = las.clone();
+        if f.las_waveform {
+            s.waveform = Some(crate::output::Digitizer::with_full_scale(
+                (survey.receiver.bin_s * 1e12).round() as u32,
+                1.0,
+            ));
+        }
+        let name = if single { "points.las" } else { "LAS files" };
+        add(name, s.file_len(points) + headers, false);
+    }
+    if f.las_waveform {
+        let samples = scaled(sample.waveform_samples);
+        add(
+            "points.wdp",
+            WDP_HEADER_LEN + samples * u64::from(WAVEFORM_BITS / 8),
+            false,
+        );
+    }
+    if f.laz {
+        // LASzip keeps a third or less of the bytes of airborne points.
+        let name = if single { "points.laz" } else { "LAZ files" };
+        add(name, las.file_len(points) * 2 / 5 + headers, false);
+    }
+    if f.ply {
+        add(
+            "points.ply",
+            crate::output::PlyWriter::file_len(points),
+            false,
+        );
+    }
+    if f.xyz {
+        let header = crate::output::XYZ_COLUMNS.len() as u64 + 1;
+        add("points.xyz", header + scaled(sample.xyz_bytes), false);
+    }
+    let trajectory = trajectory_bytes(survey, lines);
+    for name in [
+        "trajectory.csv",
+        "trajectory_true.csv",
+        "trajectory_observed.csv",
+    ] {
+        add(name, trajectory, false);
+    }
+    add(
+        "report.html",
+        report_bytes(survey, world, plan.point_density_per_m2),
+        true,
+    );
+    let total_bytes = files.iter().map(|f| f.bytes).sum();
+    let per_slot = sample.points as f64 / sample.slots.max(1) as f64;
+    Budget {
+        pulses: plan.pulses,
+        points,
+        sampled_slots: sample.slots,
+        points_per_slot: per_slot,
+        layout_files,
+        files,
+        total_bytes,
+        memory_bytes: memory_bytes(survey, scene, threads, per_slot),
+    }
+}
+
+/// Peak memory of a run on `threads` threads giving `per_slot` points per
+/// pulse slot: the scene, its index, and per thread the receiver's record
+/// (samples, impulses, background and detection: four f64 buffers) of the
+/// longest pulse window, the ordering window of blocks of points, the
+/// sinks' buffers and the report.
+fn memory_bytes(survey: &Survey, scene: &Scene, threads: usize, per_slot: f64) -> u64 {
+    let threads = threads.max(1) as u64;
+    let window = (range_to_bin(
+        survey.scanner.max_range_m - survey.scanner.min_range_m,
+        survey.receiver.bin_s,
+    ) + 64.0)
+        .min(crate::survey::MAX_WINDOW_SAMPLES as f64) as u64;
+    let per_thread = 4 * 8 * window + (1 << 20);
+    let block_points = (crate::sim::BLOCK_PULSES as f64 * per_slot.max(1.0)) as u64;
+    let ordering = WINDOW_BLOCKS_PER_THREAD
+        * threads
+        * block_points
+        * std::mem::size_of::<crate::output::PointRecord>() as u64;
+    let sinks = 4 << 20;
+    BASE_MEMORY
+        + scene_bytes(scene)
+        + scene.primitives.len() as u64 * INDEX_BYTES_PER_PRIMITIVE
+        + threads * per_thread
+        + ordering
+        + sinks
+        + REPORT_MEMORY
 }
 
 /// Bytes the loaded scene occupies: its primitives, what they own, shared
@@ -132,182 +389,6 @@ fn scene_bytes(scene: &Scene) -> u64 {
             .iter()
             .map(|o| (std::mem::size_of_val(o) + o.heap_bytes()) as u64)
             .sum::<u64>()
-}
-
-/// The share of `line`'s duration during which its swath (the scan
-/// half-angle over the height above the scene's bottom, plus the
-/// footprint) overlaps the scene's extent `b` in plan, from 256 samples.
-fn share_over_scene(survey: &Survey, line: &crate::sensor::platform::FlightLine, b: Aabb) -> f64 {
-    if b.is_empty() {
-        return 0.0;
-    }
-    let s = &survey.scanner;
-    let samples = 256;
-    let over = (0..samples)
-        .filter(|&k| {
-            let t = line.duration_s() * (f64::from(k) + 0.5) / f64::from(samples);
-            let p = line.pose_at(t).position_m;
-            let h = (p.z - b.min.z).max(0.0).min(s.max_range_m);
-            let reach = h * (s.deflector.max_off_nadir_rad() + 0.5 * s.divergence_rad).tan() + 1.0;
-            p.x + reach >= b.min.x
-                && p.x - reach <= b.max.x
-                && p.y + reach >= b.min.y
-                && p.y - reach <= b.max.y
-        })
-        .count();
-    over as f64 / f64::from(samples)
-}
-
-/// Estimates the run of `survey` over `world` on `threads` threads, its
-/// flight lines of `line_pulses` pulse slots each
-/// ([`crate::flight::Flight::estimate`] gives them).
-pub fn estimate(survey: &Survey, world: &World, line_pulses: &[u64], threads: usize) -> Budget {
-    let (scene, lines) = (world.scene(), &world.lines[..]);
-    let o = &survey.output;
-    let f = &o.formats;
-    let pulses: u64 = line_pulses.iter().sum();
-    let b = world.scene_bounds();
-    let cover = crown_cover(scene, b);
-    let extra = EXTRA_RETURNS_UNDER_CROWNS.min(survey.detector.max_returns as f64 - 1.0);
-    let per_pulse = 1.0 + cover * extra;
-    // Pulse slots in which a pulse leaves (a polygon's facets look
-    // outside the field of view for part of each turn).
-    let fired = survey.scanner.deflector.emitted_share();
-    let over: f64 = lines
-        .iter()
-        .zip(line_pulses)
-        .map(|(l, &n)| n as f64 * fired * share_over_scene(survey, l, b))
-        .sum();
-    let points = (over * per_pulse).ceil() as u64;
-    // The largest coordinate written, for the text formats.
-    let mut far = if b.is_empty() {
-        0.0
-    } else {
-        b.min.abs().max(b.max.abs()).max_element()
-    };
-    for l in lines {
-        far = far.max(
-            l.start_m
-                .abs()
-                .max_element()
-                .max(l.end_m.abs().max_element()),
-        );
-    }
-    far += o.offset_m.abs().max_element();
-    let flight_s = lines
-        .last()
-        .map_or(0.0, |l| l.start_time_s + l.duration_s())
-        + o.gps_start_time_s.unwrap_or(0.0);
-    let coord = 3 * (digits(far) + 5);
-    let mut files = Vec::new();
-    let mut add = |name: &str, bytes: u64| {
-        files.push(FileEstimate {
-            name: name.to_string(),
-            bytes,
-        })
-    };
-    let las = crate::files::las_settings_for(survey, b, lines);
-    let single = o.layout == crate::survey::Layout::Single;
-    // Strips and tiles: a file (its header and VLRs) per line or tile.
-    let layout_files = match o.layout {
-        crate::survey::Layout::Single => 1,
-        crate::survey::Layout::Strips => lines.len() as u64,
-        crate::survey::Layout::Tiles(tile_m) => {
-            crate::world::tiles_over(crate::world::reachable_area(survey, b, lines), tile_m) as u64
-        }
-    };
-    let headers = (layout_files - 1) * las.file_len(0);
-    if f.las {
-        let mut s = las.clone();
-        if f.las_waveform {
-            s.waveform = Some(crate::output::Digitizer::with_full_scale(
-                (survey.receiver.bin_s * 1e12).round() as u32,
-                1.0,
-            ));
-        }
-        add(
-            if single { "points.las" } else { "LAS files" },
-            s.file_len(points) + headers,
-        );
-    }
-    if f.las_waveform {
-        // Each pulse with an echo keeps its record: the pulse shape, the
-        // spread of its returns (the scene's height at most) and guards.
-        let bin = survey.receiver.bin_s;
-        let (before, after) = survey.receiver.pulse.support_s();
-        let spread = if b.is_empty() {
-            0.0
-        } else {
-            b.extent().z.min(200.0)
-        };
-        let samples = ((before + after) / bin + range_to_bin(spread, bin)).ceil() as u64 + 10;
-        add(
-            "points.wdp",
-            WDP_HEADER_LEN + pulses * samples * u64::from(WAVEFORM_BITS / 8),
-        );
-    }
-    if f.laz {
-        // LASzip keeps a third or less of the bytes of airborne points.
-        add(
-            if single { "points.laz" } else { "LAZ files" },
-            las.file_len(points) * 2 / 5 + headers,
-        );
-    }
-    if f.ply {
-        add("points.ply", crate::output::PlyWriter::file_len(points));
-    }
-    if f.xyz {
-        let line = coord + digits(flight_s) + 10 + digits(survey.scanner.max_range_m) + 5;
-        add("points.xyz", 140 + points * (line + XYZ_FIXED_BYTES));
-    }
-    let rows: u64 = lines
-        .iter()
-        .map(|l| (l.duration_s() / o.trajectory_interval_s).floor() as u64 + 1)
-        .sum();
-    let row = digits(flight_s) + 7 + coord + 3 * 12 + digits(lines.len() as f64) + 8;
-    for name in [
-        "trajectory.csv",
-        "trajectory_true.csv",
-        "trajectory_observed.csv",
-    ] {
-        add(name, 60 + rows * row);
-    }
-    add("report.html", REPORT_BYTES);
-    let total_bytes = files.iter().map(|f| f.bytes).sum();
-
-    // Memory: the scene, its index, and per thread the receiver's record
-    // (samples, impulses, background and detection: four f64 buffers) of
-    // the longest pulse window, the ordering window of blocks of points,
-    // and the sinks' buffers.
-    let threads = threads.max(1) as u64;
-    let window = (range_to_bin(
-        survey.scanner.max_range_m - survey.scanner.min_range_m,
-        survey.receiver.bin_s,
-    ) + 64.0)
-        .min(crate::survey::MAX_WINDOW_SAMPLES as f64) as u64;
-    let per_thread = 4 * 8 * window + (1 << 20);
-    let block_points = (crate::sim::BLOCK_PULSES as f64 * per_pulse) as u64;
-    let ordering = WINDOW_BLOCKS_PER_THREAD
-        * threads
-        * block_points
-        * std::mem::size_of::<crate::output::PointRecord>() as u64;
-    let sinks = 4 << 20;
-    let memory_bytes = BASE_MEMORY
-        + scene_bytes(scene)
-        + scene.primitives.len() as u64 * INDEX_BYTES_PER_PRIMITIVE
-        + threads * per_thread
-        + ordering
-        + sinks
-        + REPORT_BYTES;
-    Budget {
-        pulses,
-        points,
-        crown_cover: cover,
-        layout_files,
-        files,
-        total_bytes,
-        memory_bytes,
-    }
 }
 
 /// Bytes free to an unprivileged user on the file system that holds
@@ -411,11 +492,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn digits_and_human_bytes() {
-        assert_eq!(digits(0.5), 1);
-        assert_eq!(digits(9.99), 1);
-        assert_eq!(digits(10.0), 2);
-        assert_eq!(digits(-123456.7), 6);
+    fn human_bytes_in_words() {
         assert_eq!(human_bytes(1_500_000_000), "1.5 GB");
         assert_eq!(human_bytes(830_000_000), "830.0 MB");
         assert_eq!(human_bytes(12_000), "12 kB");
@@ -426,7 +503,8 @@ mod tests {
         let b = Budget {
             pulses: 10,
             points: 10,
-            crown_cover: 0.0,
+            sampled_slots: 10,
+            points_per_slot: 1.0,
             layout_files: 1,
             files: Vec::new(),
             total_bytes: 2_000_000_000,

@@ -305,6 +305,29 @@ pub struct TrajectoryRow {
     pub line: u32,
 }
 
+/// The header line of the trajectory files.
+pub const TRAJECTORY_HEADER: &str = "gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line\n";
+
+impl TrajectoryRow {
+    /// Appends the row as the trajectory files hold it, as
+    /// `{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}` writes it.
+    pub fn push_csv(&self, b: &mut Vec<u8>) {
+        use crate::output::text::{push_fixed, push_u64};
+        push_fixed(b, self.gps_time_s, 6);
+        for v in self.position_m.to_array() {
+            b.push(b',');
+            push_fixed(b, v, 4);
+        }
+        for v in self.attitude_deg {
+            b.push(b',');
+            push_fixed(b, v, 6);
+        }
+        b.push(b',');
+        push_u64(b, u64::from(self.line));
+        b.push(b'\n');
+    }
+}
+
 /// The trajectory, one row per `trajectory_interval_s` of each flight
 /// line. `observed` selects the trajectory the GNSS/IMU measured (biases
 /// and correlated errors; the per-pulse white noise is not in it) instead
@@ -363,27 +386,11 @@ pub fn write_trajectory(
         }
         Ok(())
     };
-    write_all(
-        &mut files,
-        b"gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg,line\n",
-    )?;
-    // Rows as `{:.6},{:.4},{:.4},{:.4},{:.6},{:.6},{:.6},{}` writes them,
-    // a block of them at a time.
+    write_all(&mut files, TRAJECTORY_HEADER.as_bytes())?;
+    // A block of rows at a time.
     let mut block = Vec::with_capacity(1 << 16);
     for r in trajectory_rows(survey, lines, observed) {
-        use crate::output::text::{push_fixed, push_u64};
-        push_fixed(&mut block, r.gps_time_s, 6);
-        for v in r.position_m.to_array() {
-            block.push(b',');
-            push_fixed(&mut block, v, 4);
-        }
-        for v in r.attitude_deg {
-            block.push(b',');
-            push_fixed(&mut block, v, 6);
-        }
-        block.push(b',');
-        push_u64(&mut block, u64::from(r.line));
-        block.push(b'\n');
+        r.push_csv(&mut block);
         if block.len() >= 1 << 16 {
             write_all(&mut files, &block)?;
             block.clear();

@@ -54,6 +54,40 @@ fn render_writes_top_views_and_profiles_and_rejects_bad_options() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Issue 49: without `-o` the picture went into the current directory as
+/// top.png. It goes beside the cloud, named after it, the view and the
+/// colours, and the command says where.
+#[test]
+fn render_without_o_writes_beside_the_cloud_and_says_where() {
+    let dir = temp("render-beside");
+    let (o, out) = run_survey(&dir, GOOD);
+    assert!(o.status.success());
+    let elsewhere = dir.join("elsewhere");
+    std::fs::create_dir_all(&elsewhere).unwrap();
+    for (args, name) in [
+        (vec!["--color", "class"], "points-top-class.png"),
+        (
+            vec!["--color", "height", "--profile", "-20,0,20,0,2"],
+            "points-profile-height.png",
+        ),
+    ] {
+        let o = bin()
+            .arg("render")
+            .arg(out.join("points.las"))
+            .args(&args)
+            .current_dir(&elsewhere)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let png = out.join(name);
+        assert_eq!(&std::fs::read(&png).unwrap()[..4], b"\x89PNG");
+        let said = String::from_utf8_lossy(&o.stdout);
+        assert!(said.contains(&format!("wrote {}", png.display())), "{said}");
+    }
+    assert_eq!(std::fs::read_dir(&elsewhere).unwrap().count(), 0);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn render_reads_laz_and_point_format_9() {
     // The fixture writes points.las (format 9 + points.wdp), points.laz

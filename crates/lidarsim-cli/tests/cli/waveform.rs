@@ -46,6 +46,22 @@ fn waveform_plots_a_pulse_of_a_run() {
         let o = bin().arg("waveform").arg(&out).args(&bad).output().unwrap();
         assert_eq!(o.status.code(), Some(2), "{bad:?}");
     }
+    // Issue 49: without -o the picture went into the current directory.
+    // It goes beside the run's files, named after the pulse, and the
+    // command says where.
+    let o = bin()
+        .arg("waveform")
+        .arg(&out)
+        .args(["--pulse", "100", "--line", "1"])
+        .current_dir(&again)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let png = out.join("waveform-line-1-pulse-100.png");
+    assert_eq!(&std::fs::read(&png).unwrap()[..4], b"\x89PNG");
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(said.contains(&format!("wrote {}", png.display())), "{said}");
+    assert!(!again.join("waveform.png").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -593,8 +593,16 @@ class Result:
     def to_laspy(self):
         """The points as a ``laspy.LasData`` (point format 6, LAS 1.4) with
         the LAS file's scale, offset and extra bytes: writing it gives the
-        points of ``points.las``. Needs laspy; the CRS needs pyproj."""
-        import laspy
+        points of ``points.las``. Needs laspy (``pip install laspy``, or the
+        ``lidarsim[laspy]`` extra); the CRS needs pyproj."""
+        try:
+            import laspy
+        except ImportError as e:
+            raise ModuleNotFoundError(
+                "Result.to_laspy() needs laspy, which is not installed: "
+                'pip install laspy (or pip install "lidarsim[laspy]")',
+                name="laspy",
+            ) from e
 
         p = self.points
         h = self.las_header

@@ -30,7 +30,7 @@ pub use las::{
 };
 pub use ply::{PLY_PROPERTIES, PLY_RECORD_LEN, PlyWriter};
 pub use record::{Component, NO_OBJECT, PointRecord, WaveformBlock, WaveformPacket};
-pub use xyz::XyzWriter;
+pub use xyz::{XYZ_COLUMNS, XyzWriter, push_xyz_lines};
 
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};

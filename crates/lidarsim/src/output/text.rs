@@ -20,9 +20,10 @@ pub fn push_u64(out: &mut Vec<u8>, mut v: u64) {
 }
 
 /// Appends `v` with `decimals` digits after the point, exactly as
-/// `format!("{v:.decimals$}")` writes it: the exact binary value rounded to
-/// nearest, ties to even, and a minus sign whenever the sign bit is set
-/// (`-0.000`). The scaling by `10^decimals` (exact as a double) is one
+/// `format!("{v:.decimals$}")` writes it — the exact binary value rounded to
+/// nearest, ties to even — except that a value that rounds to zero is
+/// written without a sign (`0.000`, where the standard formatter writes
+/// `-0.000` for `-0.0` and for tiny negatives). The scaling by `10^decimals` (exact as a double) is one
 /// correctly rounded multiplication, and rounding is monotonic: below 2⁵²
 /// every half-integer is a double, so an exact product below a half-integer
 /// cannot come out above it, nor one above below it. Unless the scaled
@@ -38,7 +39,7 @@ pub fn push_fixed(out: &mut Vec<u8>, v: f64, decimals: u32) {
     let f = t - t.floor();
     if t < TWO_52 && f != 0.5 {
         let q = t.round() as u64;
-        if v.is_sign_negative() {
+        if v.is_sign_negative() && q != 0 {
             out.push(b'-');
         }
         push_u64(out, q / scale);
@@ -56,7 +57,11 @@ pub fn push_fixed(out: &mut Vec<u8>, v: f64, decimals: u32) {
         }
     } else {
         // Writing into a vector cannot fail.
+        let start = out.len();
         let _ = write!(out, "{v:.prec$}", prec = decimals as usize);
+        if out[start] == b'-' && out[start + 1..].iter().all(|&b| b == b'0' || b == b'.') {
+            out.remove(start);
+        }
     }
 }
 
@@ -70,10 +75,11 @@ mod tests {
         String::from_utf8(b).unwrap()
     }
 
-    /// Against the standard formatter, digit for digit: random values of
-    /// every magnitude the columns hold, values at and next to ties (exact
-    /// binary halves such as 0.125, and decimal halves that binary cannot
-    /// hold), signed zeros, tiny negatives, huge and non-finite values.
+    /// Against the standard formatter, digit for digit (less the sign of
+    /// a negative zero): random values of every magnitude the columns
+    /// hold, values at and next to ties (exact binary halves such as
+    /// 0.125, and decimal halves that binary cannot hold), signed zeros,
+    /// tiny negatives, huge and non-finite values.
     #[test]
     fn fixed_point_digits_equal_the_standard_formatter() {
         let mut rng = crate::rng::Stream::new(11, 0, 0, crate::rng::Purpose::Test);
@@ -112,12 +118,27 @@ mod tests {
         let mut checked = 0;
         for &v in &values {
             for d in [0u32, 3, 4, 6, 9] {
-                let want = format!("{v:.prec$}", prec = d as usize);
+                let std = format!("{v:.prec$}", prec = d as usize);
+                let want = match std.strip_prefix('-') {
+                    Some(rest) if rest.bytes().all(|b| b == b'0' || b == b'.') => rest.to_string(),
+                    _ => std,
+                };
                 assert_eq!(fixed(v, d), want, "{v:e} to {d} decimals");
                 checked += 1;
             }
         }
         assert!(checked > 1_000_000);
+        // Issue 49: the demo's XYZ file held 304 065 heights as "-0.000".
+        for (v, d, want) in [
+            (-0.0, 3, "0.000"),
+            (-0.0004, 3, "0.000"),
+            (-0.0006, 3, "-0.001"),
+            (-0.4, 0, "0"),
+            (-0.5, 0, "0"),
+            (-1.5, 0, "-2"),
+        ] {
+            assert_eq!(fixed(v, d), want, "{v} to {d} decimals");
+        }
         let mut b = Vec::new();
         for v in [0, 7, 10, 65_535, u64::MAX] {
             b.clear();

@@ -45,40 +45,44 @@ impl XyzWriter {
     }
 }
 
+/// Appends the lines of `points` as `points.xyz` holds them (in
+/// [`XYZ_COLUMNS`] order), `origin_m` added to every position.
+pub fn push_xyz_lines(b: &mut Vec<u8>, points: &[PointRecord], origin_m: [f64; 3]) {
+    let o = origin_m;
+    // The columns after the first, each after a space.
+    let fixed = |b: &mut Vec<u8>, v: f64, decimals: u32| {
+        b.push(b' ');
+        push_fixed(b, v, decimals);
+    };
+    let integer = |b: &mut Vec<u8>, v: u64| {
+        b.push(b' ');
+        push_u64(b, v);
+    };
+    for p in points {
+        push_fixed(b, p.position_m.x + o[0], 3);
+        fixed(b, p.position_m.y + o[1], 3);
+        fixed(b, p.position_m.z + o[2], 3);
+        integer(b, u64::from(p.intensity));
+        integer(b, u64::from(p.return_number));
+        integer(b, u64::from(p.number_of_returns));
+        integer(b, u64::from(p.classification));
+        fixed(b, p.gps_time_s, 9);
+        fixed(b, p.scan_angle_deg, 3);
+        integer(b, u64::from(p.point_source_id));
+        fixed(b, p.amplitude, 6);
+        fixed(b, p.echo_width_ns, 3);
+        fixed(b, p.range_m, 4);
+        integer(b, u64::from(p.component.code()));
+        b.push(b'\n');
+    }
+}
+
 impl PointSink for XyzWriter {
     type Error = WriteError;
 
     fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteError> {
-        let o = self.origin_m;
-        // The columns after the first, each after a space.
-        let fixed = |b: &mut Vec<u8>, v: f64, decimals: u32| {
-            b.push(b' ');
-            push_fixed(b, v, decimals);
-        };
-        let integer = |b: &mut Vec<u8>, v: u64| {
-            b.push(b' ');
-            push_u64(b, v);
-        };
         self.block.clear();
-        for p in points {
-            let b = &mut self.block;
-            // In `XYZ_COLUMNS` order.
-            push_fixed(b, p.position_m.x + o[0], 3);
-            fixed(b, p.position_m.y + o[1], 3);
-            fixed(b, p.position_m.z + o[2], 3);
-            integer(b, u64::from(p.intensity));
-            integer(b, u64::from(p.return_number));
-            integer(b, u64::from(p.number_of_returns));
-            integer(b, u64::from(p.classification));
-            fixed(b, p.gps_time_s, 9);
-            fixed(b, p.scan_angle_deg, 3);
-            integer(b, u64::from(p.point_source_id));
-            fixed(b, p.amplitude, 6);
-            fixed(b, p.echo_width_ns, 3);
-            fixed(b, p.range_m, 4);
-            integer(b, u64::from(p.component.code()));
-            b.push(b'\n');
-        }
+        push_xyz_lines(&mut self.block, points, self.origin_m);
         if let Err(e) = self.file.writer().write_all(&self.block) {
             return Err(self.file.error(e));
         }

@@ -120,7 +120,10 @@ pub fn plan(survey: &Survey, world: &World) -> Plan {
         let h = (mid.z - crate::accel::ground_below(caster, mid)).max(0.0);
         let sw = swath::swath(survey, h, ground_material(caster, mid));
         let w = sw.width_m;
-        let pulses = (survey.pulses_of(line) as f64 * s.deflector.emitted_share()).round() as u64;
+        // The pulses that fire, counted as the simulation tests them.
+        let pulses = s
+            .deflector
+            .emitted_slots(line.start_time_s, s.prf_hz, survey.pulses_of(line));
         let step_rad = s.deflector.pulse_step_rad(s.prf_hz);
         let prf = s.prf_hz * s.deflector.emitted_share() * sw.landing_share;
         // A profiler's (or a narrow fan's) pulses cover at least their

@@ -54,6 +54,17 @@ impl Image {
         }
     }
 
+    /// Copies `other` into this image with its top-left corner at
+    /// `(x, y)` (what falls outside is left out).
+    pub fn paste(&mut self, x: usize, y: usize, other: &Image) {
+        let w = other.width.min(self.width.saturating_sub(x));
+        for row in 0..other.height.min(self.height.saturating_sub(y)) {
+            let src = 3 * row * other.width;
+            let dst = 3 * ((y + row) * self.width + x);
+            self.rgb[dst..dst + 3 * w].copy_from_slice(&other.rgb[src..src + 3 * w]);
+        }
+    }
+
     /// The image as an 8-bit RGB PNG.
     pub fn to_png(&self) -> Result<Vec<u8>, png::EncodingError> {
         let mut bytes = Vec::new();
@@ -82,6 +93,24 @@ impl Image {
             .map_err(|e| WriteError::new(path, WriteCause::Unsupported(e.to_string())))?;
         crate::output::write_atomic(path, &png)
     }
+}
+
+/// Standard base64 (RFC 4648) of `bytes`: pictures embedded in a page.
+pub fn base64(bytes: &[u8]) -> String {
+    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for c in bytes.chunks(3) {
+        let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for k in 0..4 {
+            if k <= c.len() {
+                out.push(T[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
 }
 
 /// Draws a straight line (Bresenham).

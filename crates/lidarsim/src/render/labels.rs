@@ -13,7 +13,7 @@ pub fn fixed(v: f64, decimals: usize) -> String {
 
 /// Round values from `lo` to `hi`, at most `max_ticks` of them (steps of
 /// 1, 2 or 5 times a power of ten), and the decimals their labels need.
-pub(super) fn nice_ticks(lo: f64, hi: f64, max_ticks: usize) -> (Vec<f64>, usize) {
+pub fn nice_ticks(lo: f64, hi: f64, max_ticks: usize) -> (Vec<f64>, usize) {
     let span = hi - lo;
     if !(span > 0.0 && span.is_finite()) {
         return (vec![lo], 1);

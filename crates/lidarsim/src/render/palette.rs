@@ -4,6 +4,7 @@
 //! legend or colour bar explaining them.
 
 use super::Image;
+use super::figure::{Anchor, Figure, LABEL_PX, TITLE_PX};
 use super::frame::no_data;
 use super::image::INK;
 use super::labels::fixed;
@@ -127,7 +128,7 @@ fn robust_range(mut v: Vec<f64>) -> (f64, f64) {
 }
 
 /// What the legend of a robust colour bar says about its range.
-const ROBUST_NOTE: &str = "0.1-99.9 % RANGE";
+const ROBUST_NOTE: &str = "0.1–99.9 % range";
 
 /// The robust range of `values` (from a regular sample of at most about a
 /// million of them) and whether values lie below or above it by more than
@@ -300,63 +301,92 @@ impl Palette {
         } else {
             least as usize
         };
-        let unit = if self.by == ColorBy::Height { " M" } else { "" };
+        let unit = if self.by == ColorBy::Height { " m" } else { "" };
         (
             format!("{}{unit}", fixed(self.range.0, decimals)),
             format!("{}{unit}", fixed(self.range.1, decimals)),
         )
     }
 
-    /// Draws the legend or colour bar in the panel starting at `x0`.
-    pub(super) fn draw(&self, img: &mut Image, x0: usize, top: usize, bottom: usize) {
+    /// Draws the legend or colour bar in the panel starting at `x0`,
+    /// between rows `top` and `bottom`.
+    pub(super) fn draw(&self, fig: &mut Figure, x0: usize, top: usize, bottom: usize) {
         let below = match self.by {
             ColorBy::Height | ColorBy::Intensity | ColorBy::Time => {
-                let title = self.title.unwrap_or(match self.by {
-                    ColorBy::Height => "HEIGHT",
-                    ColorBy::Time => "GPS TIME S",
-                    _ => "INTENSITY",
-                });
-                img.text(x0, top + 4, title, INK);
-                let (y0, y1) = (top + 24, bottom.saturating_sub(44).max(top + 64));
-                for y in y0..y1 {
-                    let v = 1.0 - (y - y0) as f64 / (y1 - y0 - 1).max(1) as f64;
-                    img.fill(x0, y, 24, 1, ramp(v));
-                }
-                // Arrows beyond the ends where values were clamped.
-                for r in 0..6 {
-                    let half = 12 * r / 6;
-                    if self.clipped.1 {
-                        img.fill(x0 + 12 - half, y0 - 7 + r, 2 * half.max(1), 1, ramp(1.0));
-                    }
-                    if self.clipped.0 {
-                        img.fill(x0 + 12 - half, y1 + 6 - r, 2 * half.max(1), 1, ramp(0.0));
-                    }
-                }
-                let (lo, hi) = self.end_labels();
-                img.text(x0 + 30, y0, &hi, INK);
-                img.text(x0 + 30, y1 - 7, &lo, INK);
-                if let Some(note) = self.note {
-                    img.text(x0, y1 + 12, note, INK);
-                }
-                y1 + 26
+                self.draw_bar(fig, x0, top, bottom)
             }
             _ => {
                 for (k, (c, name)) in self.entries.iter().enumerate() {
-                    let y = top + 6 + 16 * k;
-                    img.fill(x0, y, 12, 10, *c);
-                    img.text(x0 + 18, y + 2, name, INK);
+                    let y = (top + 6 + 16 * k) as f64;
+                    fig.rect(x0 as f64, y, 12.0, 10.0, *c);
+                    fig.text(
+                        x0 as f64 + 18.0,
+                        y - 2.0,
+                        name,
+                        LABEL_PX,
+                        Anchor::Start,
+                        INK,
+                    );
                 }
                 top + 6 + 16 * self.entries.len()
             }
         };
         if self.no_data {
-            for y in below..below + 10 {
-                for x in x0..x0 + 12 {
-                    img.set(x, y, no_data(x, y));
+            // The hatching as the map has it at the swatch's place.
+            let mut swatch = Image::new(12, 10, INK);
+            for j in 0..10 {
+                for i in 0..12 {
+                    swatch.set(i, j, no_data(x0 + i, below + j));
                 }
             }
-            img.text(x0 + 18, below + 2, "NO DATA", INK);
+            fig.raster(x0, below, swatch);
+            let y = below as f64 - 2.0;
+            fig.text(x0 as f64 + 18.0, y, "no data", LABEL_PX, Anchor::Start, INK);
         }
+    }
+
+    /// Draws a colour bar with its title, end labels, the arrows of values
+    /// beyond its ends and its note; returns the row below it.
+    fn draw_bar(&self, fig: &mut Figure, x0: usize, top: usize, bottom: usize) -> usize {
+        let title = self.title.unwrap_or(match self.by {
+            ColorBy::Height => "height",
+            ColorBy::Time => "GPS time, s",
+            _ => "intensity",
+        });
+        let x = x0 as f64;
+        fig.text(x, top as f64 + 2.0, title, TITLE_PX, Anchor::Start, INK);
+        let (y0, y1) = (top + 24, bottom.saturating_sub(44).max(top + 64));
+        let mut bar = Image::new(24, y1 - y0, INK);
+        for y in 0..y1 - y0 {
+            let v = 1.0 - y as f64 / (y1 - y0 - 1).max(1) as f64;
+            bar.fill(0, y, 24, 1, ramp(v));
+        }
+        fig.raster(x0, y0, bar);
+        // Arrows beyond the ends where values were clamped.
+        for r in 0..6 {
+            let half = 12 * r / 6;
+            let (left, width) = ((x0 + 12 - half) as f64, (2 * half.max(1)) as f64);
+            if self.clipped.1 {
+                fig.rect(left, (y0 - 7 + r) as f64, width, 1.0, ramp(1.0));
+            }
+            if self.clipped.0 {
+                fig.rect(left, (y1 + 6 - r) as f64, width, 1.0, ramp(0.0));
+            }
+        }
+        let (lo, hi) = self.end_labels();
+        fig.text(x + 30.0, y0 as f64 - 2.0, &hi, LABEL_PX, Anchor::Start, INK);
+        fig.text(
+            x + 30.0,
+            y1 as f64 - 12.0,
+            &lo,
+            LABEL_PX,
+            Anchor::Start,
+            INK,
+        );
+        if let Some(note) = self.note {
+            fig.text(x, y1 as f64 + 9.0, note, LABEL_PX, Anchor::Start, INK);
+        }
+        y1 + 26
     }
 }
 
@@ -381,11 +411,11 @@ mod tests {
     #[test]
     fn bar_labels_are_never_negative_zero() {
         let p = Palette::bar(ColorBy::Height, (-0.04, 20.9));
-        assert_eq!(p.end_labels(), ("0.0 M".to_string(), "20.9 M".to_string()));
+        assert_eq!(p.end_labels(), ("0.0 m".to_string(), "20.9 m".to_string()));
         let p = Palette::bar(ColorBy::Height, (-0.0004, 0.08));
         assert_eq!(
             p.end_labels(),
-            ("0.000 M".to_string(), "0.080 M".to_string())
+            ("0.000 m".to_string(), "0.080 m".to_string())
         );
     }
 

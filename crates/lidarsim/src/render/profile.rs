@@ -2,6 +2,7 @@
 //! distance along it and height, with a height axis, optionally with the
 //! heights stretched to fill the picture.
 
+use super::figure::{Anchor, Figure, LABEL_PX};
 use super::frame::{FOOTER_HEIGHT, LEGEND_WIDTH, scale_bar};
 use super::image::{BACKGROUND, INK};
 use super::labels::{fixed, nice_ticks};
@@ -55,47 +56,64 @@ impl<'a> Section<'a> {
     /// The picture at `res_h` m per pixel along the segment and `res_v` m
     /// per pixel in height: heights on an axis to the left, the legend to
     /// the right, a scale bar below (with the vertical exaggeration when
-    /// the two differ).
-    fn draw(&self, by: ColorBy, res_h: f64, res_v: f64) -> Image {
+    /// the two differ). Each point is a 2 × 2 px dot, so that a thin
+    /// layer (a road, a roof) shows as a line.
+    fn draw(&self, by: ColorBy, res_h: f64, res_v: f64) -> Figure {
         let w = cells(self.len, res_h) as usize;
         let h = cells(self.z1 - self.z0, res_v) as usize;
         let palette = Palette::new(self.sel.iter().map(|(_, p)| *p), by);
         let left = PROFILE_AXIS_PX;
-        let mut img = Image::new(
+        let mut fig = Figure::new(
             left + w + LEGEND_WIDTH,
             (h + FOOTER_HEIGHT).max(200),
             BACKGROUND,
         );
-        img.fill(left, 0, w, h, EMPTY);
+        let mut dots = Image::new(w, h, EMPTY);
         for (along, p) in &self.sel {
             let i = ((along / res_h) as usize).min(w - 1);
             let j = h - 1 - (((p.z - self.z0) / res_v) as usize).min(h - 1);
-            img.set(left + i, j, palette.color(p));
+            dots.fill(i, j, 2, 2, palette.color(p));
         }
-        // Height axis: ticks at round heights at least 30 px apart.
-        let z_top = self.z0 + h as f64 * res_v;
-        let (ticks, decimals) = nice_ticks(self.z0, z_top, (h / 30).max(2));
-        for t in ticks {
-            let j = h - 1 - (((t - self.z0) / res_v) as usize).min(h - 1);
-            img.fill(left - 4, j, 4, 1, INK);
-            let label = fixed(t, decimals);
-            let x = (left - 6).saturating_sub(6 * label.len());
-            img.text(x, j.saturating_sub(3).min(h.saturating_sub(7)), &label, INK);
-        }
-        img.fill(left - 1, 0, 1, h, INK);
-        img.text(2, h + 16, "Z M", INK);
-        palette.draw(&mut img, left + w + 10, 0, h.max(200 - FOOTER_HEIGHT));
-        let end = scale_bar(&mut img, left + 10, h + 18, w, res_h);
+        fig.raster(left, 0, dots);
+        self.height_axis(&mut fig, h, res_v);
+        palette.draw(&mut fig, left + w + 10, 0, h.max(200 - FOOTER_HEIGHT));
+        let end = scale_bar(&mut fig, left + 10, h + 18, w, res_h);
         let exaggeration = res_h / res_v;
         if (exaggeration - 1.0).abs() > 0.01 {
-            img.text(
-                end + 18,
-                h + 16,
-                &format!("HEIGHTS X{}", fixed(exaggeration, 1)),
+            let words = format!("heights × {}", fixed(exaggeration, 1));
+            fig.text(
+                end + 18.0,
+                h as f64 + 13.0,
+                &words,
+                LABEL_PX,
+                Anchor::Start,
                 INK,
             );
         }
-        img
+        fig
+    }
+
+    /// The height axis left of a `h` px tall picture: ticks at round
+    /// heights at least 30 px apart, labelled, and the axis's name.
+    fn height_axis(&self, fig: &mut Figure, h: usize, res_v: f64) {
+        let left = PROFILE_AXIS_PX as f64;
+        let z_top = self.z0 + h as f64 * res_v;
+        let (ticks, decimals) = nice_ticks(self.z0, z_top, (h / 30).max(2));
+        for t in ticks {
+            let j = (h - 1 - (((t - self.z0) / res_v) as usize).min(h - 1)) as f64;
+            fig.rect(left - 4.0, j, 4.0, 1.0, INK);
+            let y = (j - 7.0).clamp(0.0, (h as f64 - 14.0).max(0.0));
+            fig.text(
+                left - 6.0,
+                y,
+                &fixed(t, decimals),
+                LABEL_PX,
+                Anchor::End,
+                INK,
+            );
+        }
+        fig.rect(left - 1.0, 0.0, 1.0, h as f64, INK);
+        fig.text(2.0, h as f64 + 13.0, "z, m", LABEL_PX, Anchor::Start, INK);
     }
 }
 
@@ -112,7 +130,7 @@ pub fn profile(
     width_m: f64,
     by: ColorBy,
     resolution_m: Option<f64>,
-) -> Result<Image, TooLarge> {
+) -> Result<Figure, TooLarge> {
     let s = Section::select(points, a, b, width_m);
     let res = fit_resolution(s.len, s.z1 - s.z0, resolution_m, || {
         (s.len / 1200.0).max(0.05)
@@ -132,7 +150,7 @@ pub fn profile_exaggerated(
     by: ColorBy,
     resolution_m: f64,
     height_px: usize,
-) -> Image {
+) -> Figure {
     let s = Section::select(points, a, b, width_m);
     let res_h = resolution_m.max(s.len / (MAX_SIDE_PX - 1) as f64);
     let rows = height_px.clamp(2, 2000);
@@ -173,7 +191,8 @@ mod tests {
             ColorBy::Class,
             Some(res),
         )
-        .unwrap();
+        .unwrap()
+        .to_image();
         let ink = |x: usize| (0..img.height - FOOTER_HEIGHT).find(|&y| img.get(x, y) != EMPTY);
         for (x_m, z) in [(0.0, 12.0), (-5.0, 9.0), (5.0, 9.0), (-9.9, 6.06)] {
             let col = PROFILE_AXIS_PX + ((x_m + 10.0) / res) as usize;
@@ -201,7 +220,8 @@ mod tests {
             ColorBy::Class,
             0.1,
             300,
-        );
+        )
+        .to_image();
         let ink = |x: usize| (0..300).find(|&y| img.get(x, y) != EMPTY);
         let row = |z: f64| (13.0 - z) / 8.0 * 300.0;
         for (x_m, z) in [(0.0, 12.0), (-10.0, 6.0), (5.0, 9.0)] {

@@ -1,8 +1,8 @@
 //! Quantities against time: stacked panels sharing one time axis, each
 //! with its own vertical range.
 
-use super::Image;
-use super::image::{BACKGROUND, INK, line};
+use super::figure::{Anchor, Figure, LABEL_PX, TITLE_PX};
+use super::image::{BACKGROUND, INK};
 use super::labels::{fixed, nice_ticks};
 
 /// One quantity against time, a panel of [`time_panels`].
@@ -25,13 +25,13 @@ const SERIES_LEFT: usize = 80;
 const SERIES_GAP: usize = 30;
 
 /// Stacked panels sharing one time axis, one per series, each with its own
-/// vertical range (the data's, with a margin) and round ticks; the time
-/// axis is labelled under the last panel.
-pub fn time_panels(series: &[Series]) -> Image {
+/// vertical range (the data's, with a margin) and round ticks (steps of 1,
+/// 2 or 5); the time axis is labelled under the last panel.
+pub fn time_panels(series: &[Series]) -> Figure {
     let n = series.len().max(1);
-    let mut img = Image::new(
+    let mut fig = Figure::new(
         SERIES_LEFT + SERIES_WIDTH + 30,
-        n * (SERIES_HEIGHT + SERIES_GAP) + 40,
+        n * (SERIES_HEIGHT + SERIES_GAP) + 44,
         BACKGROUND,
     );
     let all = || series.iter().flat_map(|s| s.runs.iter().flatten());
@@ -39,18 +39,24 @@ pub fn time_panels(series: &[Series]) -> Image {
         (a.min(p.0), b.max(p.0))
     });
     if !(t0.is_finite() && t1.is_finite()) {
-        img.text(10, 10, "NO DATA", INK);
-        return img;
+        fig.text(10.0, 10.0, "no data", TITLE_PX, Anchor::Start, INK);
+        return fig;
     }
     let t1 = if t1 > t0 { t1 } else { t0 + 1.0 };
-    let x_of = |t: f64| {
-        SERIES_LEFT as i64 + ((t - t0) / (t1 - t0) * (SERIES_WIDTH - 1) as f64).round() as i64
-    };
+    let x_of =
+        |t: f64| SERIES_LEFT as f64 + ((t - t0) / (t1 - t0) * (SERIES_WIDTH - 1) as f64).round();
     let (t_ticks, t_dec) = nice_ticks(t0, t1, 10);
     for (k, s) in series.iter().enumerate() {
-        let top = k * (SERIES_HEIGHT + SERIES_GAP) + SERIES_GAP;
-        let bottom = top + SERIES_HEIGHT - 1;
-        img.text(SERIES_LEFT, top - 14, &s.title, INK);
+        let top = (k * (SERIES_HEIGHT + SERIES_GAP) + SERIES_GAP) as f64;
+        let bottom = top + (SERIES_HEIGHT - 1) as f64;
+        fig.text(
+            SERIES_LEFT as f64,
+            top - 18.0,
+            &s.title,
+            TITLE_PX,
+            Anchor::Start,
+            INK,
+        );
         let (mut lo, mut hi) = s
             .runs
             .iter()
@@ -67,55 +73,57 @@ pub fn time_panels(series: &[Series]) -> Image {
             (0.05 * lo.abs()).max(1e-3)
         };
         let (lo, hi) = (lo - pad, hi + pad);
-        let y_of = |v: f64| {
-            bottom as i64 - ((v - lo) / (hi - lo) * (SERIES_HEIGHT - 1) as f64).round() as i64
-        };
+        let y_of = |v: f64| bottom - ((v - lo) / (hi - lo) * (SERIES_HEIGHT - 1) as f64).round();
         // Axes, a light line at zero, ticks.
-        let (x0, x1) = (SERIES_LEFT as i64, (SERIES_LEFT + SERIES_WIDTH - 1) as i64);
+        let (x0, x1) = (SERIES_LEFT as f64, (SERIES_LEFT + SERIES_WIDTH - 1) as f64);
         if lo < 0.0 && hi > 0.0 {
-            line(&mut img, (x0, y_of(0.0)), (x1, y_of(0.0)), [200, 200, 200]);
+            fig.line(vec![(x0, y_of(0.0)), (x1, y_of(0.0))], [200, 200, 200]);
         }
-        line(&mut img, (x0, top as i64), (x0, bottom as i64), INK);
-        line(&mut img, (x0, bottom as i64), (x1, bottom as i64), INK);
+        fig.line(vec![(x0, top), (x0, bottom), (x1, bottom)], INK);
         let (ticks, dec) = nice_ticks(lo, hi, 4);
         for v in ticks {
             let y = y_of(v);
-            line(&mut img, (x0 - 4, y), (x0 - 1, y), INK);
-            let label = fixed(v, dec);
-            let x = (SERIES_LEFT - 6).saturating_sub(6 * label.len());
-            img.text(x, (y - 3).max(0) as usize, &label, INK);
+            fig.line(vec![(x0 - 4.0, y), (x0 - 1.0, y)], INK);
+            fig.text(
+                x0 - 7.0,
+                y - 0.6 * LABEL_PX,
+                &fixed(v, dec),
+                LABEL_PX,
+                Anchor::End,
+                INK,
+            );
         }
         for &t in &t_ticks {
             let x = x_of(t);
-            line(&mut img, (x, bottom as i64), (x, bottom as i64 + 3), INK);
+            fig.line(vec![(x, bottom), (x, bottom + 3.0)], INK);
         }
         for run in &s.runs {
-            for w in run.windows(2) {
-                line(
-                    &mut img,
-                    (x_of(w[0].0), y_of(w[0].1)),
-                    (x_of(w[1].0), y_of(w[1].1)),
-                    s.color,
-                );
-            }
-            if let [p] = run.as_slice() {
-                img.set(x_of(p.0) as usize, y_of(p.1) as usize, s.color);
-            }
+            fig.line(
+                run.iter().map(|&(t, v)| (x_of(t), y_of(v))).collect(),
+                s.color,
+            );
         }
     }
-    let bottom = n * (SERIES_HEIGHT + SERIES_GAP) - 1;
+    let bottom = (n * (SERIES_HEIGHT + SERIES_GAP) - 1) as f64;
     for &t in &t_ticks {
-        let label = fixed(t, t_dec);
-        let x = (x_of(t) as usize).saturating_sub(3 * label.len());
-        img.text(x, bottom + 7, &label, INK);
+        fig.text(
+            x_of(t),
+            bottom + 5.0,
+            &fixed(t, t_dec),
+            LABEL_PX,
+            Anchor::Middle,
+            INK,
+        );
     }
-    img.text(
-        SERIES_LEFT + SERIES_WIDTH / 2 - 18,
-        bottom + 22,
-        "TIME S",
+    fig.text(
+        (SERIES_LEFT + SERIES_WIDTH / 2) as f64,
+        bottom + 22.0,
+        "time since the survey's start, s",
+        TITLE_PX,
+        Anchor::Middle,
         INK,
     );
-    img
+    fig
 }
 
 #[cfg(test)]
@@ -132,10 +140,11 @@ mod tests {
         let flat: Vec<(f64, f64)> = (0..=10).map(|i| (20.0 + i as f64, 0.5)).collect();
         let c = [200, 0, 0];
         let img = time_panels(&[Series {
-            title: "TEST".into(),
+            title: "test".into(),
             color: c,
             runs: vec![rise, flat],
-        }]);
+        }])
+        .to_image();
         let column = |t: f64| SERIES_LEFT + (t / 30.0 * (SERIES_WIDTH - 1) as f64).round() as usize;
         let rows = |x: usize| {
             (0..img.height)

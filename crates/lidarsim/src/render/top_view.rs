@@ -1,10 +1,11 @@
 //! Top views of a cloud: the highest point of each pixel, north up, with
 //! one-pixel holes between scan lines filled and real gaps hatched.
 
-use super::frame::{finish_frame, frame};
+use super::RenderPoint;
+use super::figure::Figure;
+use super::frame::{framed, hatched};
 use super::limits::{TooLarge, cells, fit_resolution};
 use super::palette::{ColorBy, Palette};
-use super::{Image, RenderPoint};
 
 /// Pixel size for a top view of `w × h` m holding `n` points: about four
 /// points per pixel on average, at most 1600 px on the longer side.
@@ -70,7 +71,7 @@ pub fn top_view(
     points: &[RenderPoint],
     by: ColorBy,
     resolution_m: Option<f64>,
-) -> Result<Image, TooLarge> {
+) -> Result<Figure, TooLarge> {
     let (mut x0, mut y0, mut x1, mut y1) = (f64::MAX, f64::MAX, f64::MIN, f64::MIN);
     for p in points {
         x0 = x0.min(p.x);
@@ -100,7 +101,7 @@ pub fn top_view(
     }
     let shown = top.iter().filter(|&&n| n != NONE).map(|&n| &points[n]);
     let palette = Palette::new(shown, by).with_no_data();
-    let mut img = frame(w, h);
+    let mut img = hatched(w, h);
     let filled = |k: usize| top[k] != NONE;
     let z = |k: usize| points[top[k]].z;
     for k in 0..w * h {
@@ -113,8 +114,7 @@ pub fn top_view(
             img.set(k % w, k / w, palette.color(&points[top[s]]));
         }
     }
-    finish_frame(&mut img, w, h, &palette, res);
-    Ok(img)
+    Ok(framed(img, &palette, res))
 }
 
 #[cfg(test)]
@@ -145,7 +145,9 @@ mod tests {
                 (0..40).map(move |j| pt(i as f64 * 0.5, j as f64 * 0.5, i as f64 * 0.1, 2))
             })
             .collect();
-        let img = top_view(&pts, ColorBy::Height, Some(0.5)).unwrap();
+        let img = top_view(&pts, ColorBy::Height, Some(0.5))
+            .unwrap()
+            .to_image();
         let row = 10;
         let pos: Vec<f64> = (0..200).map(|x| ramp_position(img.get(x, row))).collect();
         assert!(pos.windows(2).all(|w| w[1] >= w[0]), "not monotonic");
@@ -163,7 +165,9 @@ mod tests {
                 })
             })
             .collect();
-        let img = top_view(&pts, ColorBy::Class, Some(1.0)).unwrap();
+        let img = top_view(&pts, ColorBy::Class, Some(1.0))
+            .unwrap()
+            .to_image();
         let (ground, building) = (class_color(2).0, class_color(6).0);
         let mut seen = std::collections::BTreeSet::new();
         for y in 0..50 {
@@ -192,7 +196,9 @@ mod tests {
                 })
             })
             .collect();
-        let img = top_view(&pts, ColorBy::Class, Some(1.0)).unwrap();
+        let img = top_view(&pts, ColorBy::Class, Some(1.0))
+            .unwrap()
+            .to_image();
         let (w, h) = (img.width - LEGEND_WIDTH, map_px(30.0, 1.0) as usize);
         assert_eq!(w, 51);
         let ground = class_color(2).0;

@@ -2,8 +2,9 @@
 //! sub-ray returns, the received signal, the detection threshold and the
 //! echoes, against range.
 
-use super::Image;
-use super::image::{BACKGROUND, INK, line};
+use super::figure::{Anchor, Figure, LABEL_PX, TITLE_PX};
+use super::image::{BACKGROUND, INK};
+use super::labels::{fixed, nice_ticks};
 use crate::detection::Echo;
 use crate::waveform::{Waveform, bin_to_range};
 
@@ -27,7 +28,7 @@ pub struct WaveformPlot {
 pub const PLOT_WIDTH: usize = 900;
 /// Plot area height, px.
 pub const PLOT_HEIGHT: usize = 360;
-const PLOT_LEFT: usize = 60;
+const PLOT_LEFT: usize = 80;
 const PLOT_TOP: usize = 20;
 
 impl WaveformPlot {
@@ -72,110 +73,127 @@ impl WaveformPlot {
 
     /// Pixel column of a range and row of an amplitude.
     pub fn to_px(&self, range_m: f64, value: f64) -> (i64, i64) {
+        let (x, y) = self.at(range_m, value);
+        (x.round() as i64, y.round() as i64)
+    }
+
+    /// [`Self::to_px`] before rounding.
+    fn at(&self, range_m: f64, value: f64) -> (f64, f64) {
         let (r0, r1) = (self.ranges_m[0], self.ranges_m[self.ranges_m.len() - 1]);
         let x = PLOT_LEFT as f64 + (range_m - r0) / (r1 - r0).max(1e-9) * (PLOT_WIDTH - 1) as f64;
         let y = PLOT_TOP as f64 + (1.0 - value / self.y_max()) * (PLOT_HEIGHT - 1) as f64;
-        (x.round() as i64, y.round() as i64)
+        (x, y)
     }
 
     /// The picture (specification Figs. 6 and 7): grey stems for the
     /// sub-ray returns, the received signal in blue, the threshold dashed
-    /// in orange, echoes as red markers with their number.
-    pub fn render(&self) -> Image {
-        let mut img = Image::new(
+    /// in orange, echoes as red markers with their number; both axes with
+    /// round ticks (steps of 1, 2 or 5) and their quantity and unit.
+    pub fn render(&self) -> Figure {
+        let mut fig = Figure::new(
             PLOT_LEFT + PLOT_WIDTH + 170,
-            PLOT_TOP + PLOT_HEIGHT + 40,
+            PLOT_TOP + PLOT_HEIGHT + 48,
             BACKGROUND,
         );
         if self.ranges_m.len() < 2 {
-            img.text(10, 10, "NO SIGNAL", INK);
-            return img;
+            fig.text(10.0, 10.0, "no signal", TITLE_PX, Anchor::Start, INK);
+            return fig;
         }
+        let px = |r: f64, v: f64| {
+            let (x, y) = self.to_px(r, v);
+            (x as f64, y as f64)
+        };
         // Axes.
-        let (x0, y0) = (PLOT_LEFT as i64, (PLOT_TOP + PLOT_HEIGHT) as i64);
-        line(&mut img, (x0, PLOT_TOP as i64), (x0, y0), INK);
-        line(&mut img, (x0, y0), (x0 + PLOT_WIDTH as i64, y0), INK);
+        let (x0, y0) = (PLOT_LEFT as f64, (PLOT_TOP + PLOT_HEIGHT) as f64);
+        let x1 = x0 + PLOT_WIDTH as f64;
+        fig.line(vec![(x0, PLOT_TOP as f64), (x0, y0), (x1, y0)], INK);
         let (r0, r1) = (self.ranges_m[0], self.ranges_m[self.ranges_m.len() - 1]);
-        for k in 0..=4 {
-            let r = r0 + (r1 - r0) * k as f64 / 4.0;
-            let (x, _) = self.to_px(r, 0.0);
-            line(&mut img, (x, y0), (x, y0 + 4), INK);
-            img.text(
-                (x - 20).max(0) as usize,
-                (y0 + 8) as usize,
-                &format!("{r:.1}"),
+        let (ticks, decimals) = nice_ticks(r0, r1, 8);
+        for r in ticks {
+            let (x, _) = px(r, 0.0);
+            fig.line(vec![(x, y0), (x, y0 + 4.0)], INK);
+            fig.text(
+                x,
+                y0 + 7.0,
+                &fixed(r, decimals),
+                LABEL_PX,
+                Anchor::Middle,
                 INK,
             );
-            let v = self.y_max() * k as f64 / 4.0;
-            let (_, y) = self.to_px(r0, v);
-            line(&mut img, (x0 - 4, y), (x0, y), INK);
-            img.text(2, (y - 3).max(0) as usize, &format!("{v:.3}"), INK);
         }
-        img.text(
-            (x0 + PLOT_WIDTH as i64 / 2 - 30) as usize,
-            (y0 + 22) as usize,
-            "RANGE M",
+        let (ticks, decimals) = nice_ticks(0.0, self.y_max(), 5);
+        for v in ticks {
+            let (_, y) = px(r0, v);
+            fig.line(vec![(x0 - 4.0, y), (x0, y)], INK);
+            fig.text(
+                x0 - 7.0,
+                y - 0.6 * LABEL_PX,
+                &fixed(v, decimals),
+                LABEL_PX,
+                Anchor::End,
+                INK,
+            );
+        }
+        fig.text(
+            x0 + PLOT_WIDTH as f64 / 2.0,
+            y0 + 26.0,
+            "range, m",
+            TITLE_PX,
+            Anchor::Middle,
+            INK,
+        );
+        fig.vertical_text(
+            4.0,
+            PLOT_TOP as f64 + PLOT_HEIGHT as f64 / 2.0,
+            "amplitude (received power, Eq. 2)",
+            TITLE_PX,
             INK,
         );
         // Sub-ray returns as stems.
         for (r, v) in self.ranges_m.iter().zip(&self.returns) {
             if *v > 0.0 {
-                line(
-                    &mut img,
-                    self.to_px(*r, 0.0),
-                    self.to_px(*r, *v),
-                    [150, 150, 150],
-                );
+                fig.line(vec![px(*r, 0.0), px(*r, *v)], [150, 150, 150]);
             }
         }
-        // Threshold, dashed.
-        for (k, w) in self.ranges_m.windows(2).enumerate() {
-            if k % 4 < 2 {
-                let (a, b) = (
-                    self.to_px(w[0], self.threshold[k]),
-                    self.to_px(w[1], self.threshold[k + 1]),
-                );
-                line(&mut img, a, b, [230, 120, 0]);
-            }
-        }
-        // Signal.
-        for k in 0..self.ranges_m.len() - 1 {
-            let a = self.to_px(self.ranges_m[k], self.signal[k].max(0.0));
-            let b = self.to_px(self.ranges_m[k + 1], self.signal[k + 1].max(0.0));
-            line(&mut img, a, b, [31, 90, 200]);
-        }
+        // Threshold, dashed; the signal.
+        let curve = |values: &[f64]| {
+            self.ranges_m
+                .iter()
+                .zip(values)
+                .map(|(r, v)| px(*r, v.max(0.0)))
+                .collect::<Vec<_>>()
+        };
+        fig.dashed(curve(&self.threshold), [230, 120, 0]);
+        fig.line(curve(&self.signal), [31, 90, 200]);
         // Echoes.
         for (k, (r, v)) in self.echoes.iter().enumerate() {
-            let (x, y) = self.to_px(*r, *v);
-            img.fill(
-                (x - 3).max(0) as usize,
-                (y - 3).max(0) as usize,
-                7,
-                7,
-                [215, 40, 40],
-            );
-            img.text(
-                (x + 6) as usize,
-                (y - 10).max(0) as usize,
+            let (x, y) = px(*r, *v);
+            fig.rect(x - 3.0, y - 3.0, 7.0, 7.0, [215, 40, 40]);
+            fig.text(
+                x + 6.0,
+                y - 16.0,
                 &format!("{}", k + 1),
+                LABEL_PX,
+                Anchor::Start,
                 [215, 40, 40],
             );
         }
         // Legend.
-        let lx = PLOT_LEFT + PLOT_WIDTH + 15;
+        let lx = (PLOT_LEFT + PLOT_WIDTH + 15) as f64;
         for (k, (c, name)) in [
-            ([150, 150, 150], "SUB-RAYS"),
-            ([31, 90, 200], "SIGNAL"),
-            ([230, 120, 0], "THRESHOLD"),
-            ([215, 40, 40], "ECHOES"),
+            ([150, 150, 150], "sub-ray returns"),
+            ([31, 90, 200], "signal"),
+            ([230, 120, 0], "threshold"),
+            ([215, 40, 40], "echoes"),
         ]
         .iter()
         .enumerate()
         {
-            img.fill(lx, PLOT_TOP + 16 * k, 12, 10, *c);
-            img.text(lx + 18, PLOT_TOP + 16 * k + 2, name, INK);
+            let y = (PLOT_TOP + 18 * k) as f64;
+            fig.rect(lx, y, 12.0, 10.0, *c);
+            fig.text(lx + 18.0, y - 2.0, name, LABEL_PX, Anchor::Start, INK);
         }
-        img
+        fig
     }
 }
 
@@ -198,7 +216,7 @@ mod tests {
             ranges_m: ranges,
             signal,
         };
-        let img = plot.render();
+        let img = plot.render().to_image();
         let (x, y) = plot.to_px(500.0, 0.8);
         assert_eq!(
             img.get(x as usize, y as usize),

@@ -1,7 +1,7 @@
 //! Plots of the flight from the survey alone: the attitude against time
 //! and the observed minus true trajectory.
 
-use crate::render::{Image, Series, time_panels};
+use crate::render::{Figure, Series, time_panels};
 use crate::sensor::platform::FlightLine;
 use crate::survey::Survey;
 
@@ -50,13 +50,9 @@ const SERIES_COLORS: [[u8; 3]; 3] = [[31, 119, 180], [214, 39, 40], [44, 160, 44
 /// the survey's start (specification Fig. 10), one panel each; yaw less
 /// the line's heading, so that lines flown in opposite directions show
 /// their sway on one scale.
-pub fn attitude_plot(lines: &[FlightLine]) -> Image {
+pub fn attitude_plot(lines: &[FlightLine]) -> Figure {
     let samples = flight_samples(lines);
-    let names = [
-        "ROLL (OMEGA) DEG",
-        "PITCH (PHI) DEG",
-        "YAW (KAPPA) - LINE HEADING DEG",
-    ];
+    let names = ["roll ω, °", "pitch φ, °", "yaw κ − line heading, °"];
     let series: Vec<Series> = (0..3)
         .map(|axis| Series {
             title: names[axis].to_string(),
@@ -91,7 +87,7 @@ pub fn attitude_plot(lines: &[FlightLine]) -> Image {
 /// per-pulse white noise) minus the true one against the time since the
 /// survey's start: position x, y, z (m) in one picture and roll, pitch,
 /// yaw (degrees) in the other.
-pub fn trajectory_error_plots(survey: &Survey, lines: &[FlightLine]) -> (Image, Image) {
+pub fn trajectory_error_plots(survey: &Survey, lines: &[FlightLine]) -> (Figure, Figure) {
     let samples = flight_samples(lines);
     let diffs: Vec<Vec<(f64, [f64; 6])>> = samples
         .iter()
@@ -132,11 +128,11 @@ pub fn trajectory_error_plots(survey: &Survey, lines: &[FlightLine]) -> (Image, 
             .collect(),
     };
     (
-        time_panels(&[series(0, "X M"), series(1, "Y M"), series(2, "Z M")]),
+        time_panels(&[series(0, "x, m"), series(1, "y, m"), series(2, "z, m")]),
         time_panels(&[
-            series(3, "ROLL DEG"),
-            series(4, "PITCH DEG"),
-            series(5, "YAW DEG"),
+            series(3, "roll ω, °"),
+            series(4, "pitch φ, °"),
+            series(5, "yaw κ, °"),
         ]),
     )
 }

@@ -4,7 +4,7 @@
 
 use super::ReportSink;
 use crate::render::{
-    ColorBy, Image, Palette, class_color, framed, hole_source, no_data, profile_exaggerated,
+    ColorBy, Figure, Image, Palette, class_color, framed, hole_source, no_data, profile_exaggerated,
 };
 
 /// Side of the cells of the density map, m.
@@ -58,21 +58,21 @@ impl ReportSink {
     }
 
     /// Top view by height.
-    pub fn height_map(&self) -> Image {
+    pub fn height_map(&self) -> Figure {
         let p = self.height_palette();
         let map = self.map(|k| p.bar_color(f64::from(self.top_z[k])));
-        framed(&map, &p, self.resolution_m)
+        framed(map, &p, self.resolution_m)
     }
 
     /// Top view by intensity.
-    pub fn intensity_map(&self) -> Image {
+    pub fn intensity_map(&self) -> Figure {
         let p = self.intensity_palette();
         let map = self.map(|k| p.bar_color(f64::from(self.top_intensity[k])));
-        framed(&map, &p, self.resolution_m)
+        framed(map, &p, self.resolution_m)
     }
 
     /// Top view by class.
-    pub fn class_map(&self) -> Image {
+    pub fn class_map(&self) -> Figure {
         let mut classes: Vec<u8> = (0..self.top_z.len())
             .filter(|&k| self.filled(k))
             .map(|k| self.top_class[k])
@@ -81,13 +81,13 @@ impl ReportSink {
         classes.dedup();
         let p = Palette::classes(&classes).with_no_data();
         let map = self.map(|k| class_color(self.top_class[k]).0);
-        framed(&map, &p, self.resolution_m)
+        framed(map, &p, self.resolution_m)
     }
 
     /// Point density (points per m², all returns) in cells of about 5 m,
     /// on a colour bar from 0 to twice `planned` (or the 98th percentile of
     /// the cells if higher), and the median over cells with points.
-    pub fn density_map(&self, planned: f64) -> (Image, f64) {
+    pub fn density_map(&self, planned: f64) -> (Figure, f64) {
         let b = ((DENSITY_CELL_M / self.resolution_m).round() as usize).max(1);
         let (cw, ch) = (self.width.div_ceil(b), self.height.div_ceil(b));
         let mut cells = vec![0u64; cw * ch];
@@ -125,12 +125,12 @@ impl ReportSink {
             };
             map.set(x, y, color);
         }
-        (framed(&map, &p, self.resolution_m), median)
+        (framed(map, &p, self.resolution_m), median)
     }
 
-    /// Cross-section along x through the middle of the area, 2 m wide, by
-    /// class, its heights stretched to fill the picture.
-    pub fn profile_image(&self) -> Image {
+    /// Cross-section along x at the sink's north coordinate (see
+    /// [`super::section_y`]), 2 m wide, by class, its heights stretched to fill the picture.
+    pub fn profile_image(&self) -> Figure {
         let x1 = self.x0 + self.width as f64 * self.resolution_m;
         profile_exaggerated(
             &self.profile,
@@ -232,7 +232,7 @@ mod tests {
             })
             .collect();
         sink.write(&pts).unwrap();
-        let img = sink.class_map();
+        let img = sink.class_map().to_image();
         let ground = class_color(2).0;
         // 41 × 41 pixels of 1 m; row 0 at the north edge holds y 40–41 m.
         // The data cover y 0–30 m, rows 10 to 40, and all columns.

@@ -1,34 +1,15 @@
-//! HTML text: escaped strings, table rows and pictures embedded as base64
-//! PNG.
+//! HTML text: escaped strings, table rows and pictures as inline SVG.
 
 use std::fmt::Write as _;
 
-use crate::render::Image;
+use crate::render::Figure;
 
-/// Standard base64 (RFC 4648) of `bytes`.
-pub fn base64(bytes: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for c in bytes.chunks(3) {
-        let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            if k <= c.len() {
-                out.push(T[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
+pub use crate::render::base64;
 
-/// An `<img>` tag showing `img`, embedded as a base64 PNG.
-pub(super) fn img_tag(img: &Image, alt: &str) -> Result<String, png::EncodingError> {
-    Ok(format!(
-        "<img alt=\"{alt}\" src=\"data:image/png;base64,{}\">",
-        base64(&img.to_png()?)
-    ))
+/// An inline `<svg>` element drawing `fig`: the browser sets its text and
+/// keeps its lines sharp when zoomed; its rasters are embedded as PNG.
+pub(super) fn svg_tag(fig: &Figure, label: &str) -> Result<String, png::EncodingError> {
+    fig.to_svg(label)
 }
 
 /// `s` with `&`, `<` and `>` escaped.

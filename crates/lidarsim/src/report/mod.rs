@@ -25,6 +25,7 @@ mod maps;
 mod markup;
 mod page;
 mod pattern;
+mod section;
 mod sink;
 mod state;
 #[cfg(test)]
@@ -35,5 +36,6 @@ pub use flight::{attitude_plot, trajectory_error_plots};
 pub use markup::base64;
 pub use page::html;
 pub use pattern::{pattern_points, scan_pattern_plot};
+pub use section::section_y;
 pub use sink::{ReportSink, SamplePulse};
 pub use state::StateError;

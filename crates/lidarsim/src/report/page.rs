@@ -4,7 +4,7 @@
 
 use std::fmt::Write as _;
 
-use super::markup::{esc, img_tag, table_rows};
+use super::markup::{esc, svg_tag, table_rows};
 use super::{ReportSink, attitude_plot, trajectory_error_plots};
 use crate::render::{WaveformPlot, fixed};
 use crate::sensor::platform::FlightLine;
@@ -70,11 +70,11 @@ fn pattern_section(
         h,
         "<h2>Scan pattern</h2><p>Where the pulses of the first scan lines meet level ground \
          {height:.0} m below the scanner at {} m/s (the first flight line's height and speed), \
-         from above, flight direction up, coloured by time from dark (first) to light (last): \
+         from above, flight direction up, coloured by time from dark (first) to light (last); a pattern much shorter along the track than across it is stretched along it, as its title says: \
          {}.</p>{}",
         line.speed_mps,
         esc(&survey.scanner.deflector.describe()),
-        img_tag(
+        svg_tag(
             &super::scan_pattern_plot(survey, height, line.speed_mps),
             "scan pattern"
         )?
@@ -89,7 +89,7 @@ fn head(h: &mut String) {
         "<!doctype html><html><head><meta charset=\"utf-8\"><title>lidarsim report</title>\
          <style>body{{font-family:sans-serif;margin:2em;max-width:1400px}}\
          table{{border-collapse:collapse}}td,th{{border:1px solid #ccc;padding:2px 8px;text-align:left}}\
-         img{{max-width:100%;border:1px solid #ddd}}.bar{{background:#3b528b;height:14px}}</style>\
+         img,svg{{max-width:100%;height:auto;border:1px solid #ddd;display:block;margin:4px 0}}.bar{{background:#3b528b;height:14px}}</style>\
          </head><body><h1>lidarsim report</h1>"
     );
 }
@@ -185,9 +185,9 @@ fn top_views_section(h: &mut String, sink: &ReportSink) -> Result<(), png::Encod
         fixed(heights.1, 2),
         fixed(intensities.0, 0),
         fixed(intensities.1, 0),
-        img_tag(&sink.height_map(), "top view by height")?,
-        img_tag(&sink.intensity_map(), "top view by intensity")?,
-        img_tag(&sink.class_map(), "top view by class")?
+        svg_tag(&sink.height_map(), "top view by height")?,
+        svg_tag(&sink.intensity_map(), "top view by intensity")?,
+        svg_tag(&sink.class_map(), "top view by class")?
     );
     Ok(())
 }
@@ -205,8 +205,9 @@ fn cross_section(h: &mut String, sink: &ReportSink) -> Result<(), png::EncodingE
     };
     let _ = write!(
         h,
-        "<h2>Cross-section</h2><p>West to east through the middle, 2 m wide, by class.{span}</p>{}",
-        img_tag(&sink.profile_image(), "cross-section")?
+        "<h2>Cross-section</h2><p>West to east at y = {} m, 2 m wide, by class, through the row of the area that crosses the most buildings and then the most trees (the middle row where the scene has neither).{span}</p>{}",
+        fixed(sink.profile_y(), 1),
+        svg_tag(&sink.profile_image(), "cross-section")?
     );
     Ok(())
 }
@@ -246,7 +247,7 @@ fn density_section(
          5 m with points: {:.2} /m².</p>{}",
         summary.point_density_per_m2,
         mean,
-        img_tag(&density, "point density")?
+        svg_tag(&density, "point density")?
     );
     Ok(())
 }
@@ -263,7 +264,7 @@ fn waveforms_section(
                 h,
                 "<h3>{}</h3>{}",
                 esc(title),
-                img_tag(&plot.render(), title)?
+                svg_tag(&plot.render(), title)?
             );
         }
     }
@@ -292,7 +293,7 @@ fn flight_section(
         "<h2>Flight</h2><p>Attitude of the aircraft as flown (roll ω, pitch φ, and yaw κ less \
          the line's heading, degrees) against the time since the survey's start ({clock}); \
          the turns between flight lines are left out.</p>{}",
-        img_tag(&attitude_plot(lines), "attitude against time")?
+        svg_tag(&attitude_plot(lines), "attitude against time")?
     );
     if survey.navigation.is_zero() {
         let _ = write!(
@@ -308,8 +309,8 @@ fn flight_section(
         "<h3>Observed − true trajectory</h3><p>What the GNSS/IMU measured minus the path \
          flown: biases and correlated errors (the white noise of each pulse comes on top). \
          Position in m:</p>{}<p>Attitude in degrees:</p>{}",
-        img_tag(&position, "observed minus true position")?,
-        img_tag(&attitude, "observed minus true attitude")?
+        svg_tag(&position, "observed minus true position")?,
+        svg_tag(&attitude, "observed minus true attitude")?
     );
     let e = &sink.errors;
     if e.count == 0 {
@@ -389,9 +390,9 @@ vertices_m = [[-300, -300, -0.04], [300, -300, -0.04], [300, 300, -0.04], [-300,
             "Gaussian, 4.0 ns FWHM",
             "triangle (constant angular speed)",
             "1st return:",
-            "alt=\"attitude against time\"",
-            "alt=\"observed minus true position\"",
-            "alt=\"observed minus true attitude\"",
+            "aria-label=\"attitude against time\"",
+            "aria-label=\"observed minus true position\"",
+            "aria-label=\"observed minus true attitude\"",
             "Georeferencing errors of the points",
             "RMS horizontal error",
         ] {

@@ -92,6 +92,20 @@ impl ReportSink {
         }
     }
 
+    /// The same sink with its cross-section along x at `y` (m; see
+    /// [`super::section_y`]) instead of through the middle of the area.
+    pub fn through(self, y: f64) -> Self {
+        Self {
+            profile_y: y,
+            ..self
+        }
+    }
+
+    /// The north coordinate of the cross-section, m.
+    pub fn profile_y(&self) -> f64 {
+        self.profile_y
+    }
+
     /// Pixel size of the maps, m.
     pub fn resolution_m(&self) -> f64 {
         self.resolution_m

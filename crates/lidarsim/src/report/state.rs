@@ -102,12 +102,15 @@ impl ReportSink {
             _ => return Err(StateError::NotAState),
         };
         let (w, h) = (r.u64()?, r.u64()?);
-        let grid = [r.f64()?, r.f64()?, r.f64()?, r.f64()?];
+        let grid = [r.f64()?, r.f64()?, r.f64()?];
         if (w, h) != (self.width as u64, self.height as u64)
-            || grid != [self.x0, self.y0, self.resolution_m, self.profile_y]
+            || grid != [self.x0, self.y0, self.resolution_m]
         {
             return Err(StateError::OtherArea);
         }
+        // The run goes on with the cross-section it began (a build that
+        // chose it elsewhere may resume it).
+        self.profile_y = r.f64()?;
         let n = self.count.len();
         let mut k = 0;
         while k < n {

@@ -149,7 +149,9 @@ pub fn merged(
 /// The report's sink for `flight`: over the area its lines cover, pixels
 /// for its planned density.
 pub(super) fn new_report(flight: &Flight) -> ReportSink {
-    ReportSink::new(flight.covered_area(), flight.plan().point_density_per_m2)
+    let area = flight.covered_area();
+    ReportSink::new(area, flight.plan().point_density_per_m2)
+        .through(crate::report::section_y(flight.world(), area))
 }
 
 /// What the run will cost; refused, unless `options.no_space_check`, when

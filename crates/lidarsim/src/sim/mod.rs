@@ -35,7 +35,7 @@ use crate::waveform::Receiver;
 use crate::world::World;
 pub use executor::{Executor, InOrder};
 pub use scratch::PulseDetail;
-use scratch::Scratch;
+pub(crate) use scratch::Scratch;
 pub use truth::ReturnSource;
 
 /// ASPRS class of an echo no surface contributed to (receiver noise).
@@ -433,10 +433,13 @@ impl<'a> Simulator<'a> {
 /// A block of pulses to simulate: pulses `start..end` of flight line
 /// `line` (its index).
 #[derive(Clone, Copy, Debug)]
-struct BlockJob {
-    line: usize,
-    start: u64,
-    end: u64,
+pub(crate) struct BlockJob {
+    /// Index of the flight line.
+    pub line: usize,
+    /// First pulse slot.
+    pub start: u64,
+    /// One past the last pulse slot.
+    pub end: u64,
 }
 
 /// The points, counts and waveforms of one block of pulses.

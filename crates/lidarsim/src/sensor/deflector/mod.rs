@@ -108,6 +108,16 @@ impl Deflector {
         }
     }
 
+    /// How many of the pulse slots `t_k = t0_s + k / prf_hz`,
+    /// `k = 0 … slots − 1`, fire: all but a polygon's while its facet looks
+    /// outside the field of view ([`Polygon::emitted_slots`]).
+    pub fn emitted_slots(&self, t0_s: f64, prf_hz: f64, slots: u64) -> u64 {
+        match self {
+            Self::Polygon(p) => p.emitted_slots(t0_s, prf_hz, slots),
+            _ => slots,
+        }
+    }
+
     /// Share of the pulses that leave (the polygon's duty cycle; 1 for the
     /// others).
     pub fn emitted_share(&self) -> f64 {
