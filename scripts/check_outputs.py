@@ -7,7 +7,7 @@ Readers: laspy (LAS 1.4 point format 9, Extra Bytes VLR, Waveform Packet
 Descriptor VLRs, WKT VLR), laspy + lazrs (LAZ), pyproj (the CRS), and for
 PLY and the external .wdp waveform file plain numpy following the PLY
 specification and LAS 1.4 R15 (no lidarsim code). The sensor positions come
-from DIR/trajectory.csv.
+from DIR/trajectory_true.csv.
 
 Waveforms, as LASlib reads them: the samples of a point's packet start at
 byte `wavepacket_offset` of points.wdp (offsets count from the start of the
@@ -89,7 +89,7 @@ def main(out):
 
     # Sensor positions at each point's time, from the trajectory (offset
     # applied like the points).
-    traj = np.genfromtxt(out / "trajectory.csv", delimiter=",", names=True)
+    traj = np.genfromtxt(out / "trajectory_true.csv", delimiter=",", names=True)
     t = np.asarray(las.gps_time)
     sensor = np.stack([np.interp(t, traj["gps_time_s"], traj[k]) for k in ("x_m", "y_m", "z_m")], axis=1)
     xyz = np.stack([np.asarray(las.x), np.asarray(las.y), np.asarray(las.z)], axis=1)

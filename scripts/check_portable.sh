@@ -10,7 +10,7 @@ portable=target/portable/release/lidarsim
 rm -rf target/demo-v3 target/demo-portable
 SOURCE_DATE_EPOCH=1790000000 target/release/lidarsim demo -o target/demo-v3 > /dev/null 2>&1
 SOURCE_DATE_EPOCH=1790000000 "$portable" demo -o target/demo-portable > /dev/null 2>&1
-for f in points.las points.xyz trajectory.csv trajectory_observed.csv survey.toml; do
+for f in points.las points.xyz trajectory_true.csv trajectory_observed.csv survey.toml; do
     cmp "target/demo-v3/$f" "target/demo-portable/$f"
 done
 echo "the portable build's demo files equal the x86-64-v3 build's"

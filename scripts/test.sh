@@ -6,6 +6,9 @@
 # the report's browser check) from Debian's packages by install_chromium.sh.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# One build of everything, not kept for edits: no incremental state
+# (gigabytes of it, and time to write).
+export CARGO_INCREMENTAL=0
 # Each step's heading says how long the suite has run so far.
 step() { echo "== $1 (at $((SECONDS / 60))m$((SECONDS % 60))s)"; }
 

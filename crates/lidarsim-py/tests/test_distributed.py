@@ -53,7 +53,6 @@ SAME = [
     "points.laz",
     "points.xyz",
     "survey.toml",
-    "trajectory.csv",
     "trajectory_true.csv",
     "trajectory_observed.csv",
 ]

@@ -308,11 +308,7 @@ pub fn estimate(survey: &Survey, world: &World, line_pulses: &[u64], threads: us
         add("points.xyz", header + scaled(sample.xyz_bytes), false);
     }
     let trajectory = trajectory_bytes(survey, lines);
-    for name in [
-        "trajectory.csv",
-        "trajectory_true.csv",
-        "trajectory_observed.csv",
-    ] {
+    for name in ["trajectory_true.csv", "trajectory_observed.csv"] {
         add(name, trajectory, false);
     }
     add(

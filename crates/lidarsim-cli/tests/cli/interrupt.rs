@@ -180,7 +180,6 @@ fn sigint_then_resume_equals_an_uninterrupted_run() {
         "points.las",
         "points.xyz",
         "survey.toml",
-        "trajectory.csv",
         "trajectory_true.csv",
         "trajectory_observed.csv",
     ] {

@@ -93,7 +93,6 @@ const SAME: [&str; 9] = [
     "points.ply",
     "points.xyz",
     "survey.toml",
-    "trajectory.csv",
     "trajectory_true.csv",
     "trajectory_observed.csv",
 ];

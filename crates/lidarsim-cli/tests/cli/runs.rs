@@ -12,7 +12,7 @@ fn good_survey_runs_and_check_predicts_it() {
         "points.las",
         "points.xyz",
         "summary.json",
-        "trajectory.csv",
+        "trajectory_true.csv",
         "report.html",
         "survey.toml",
     ] {
@@ -46,7 +46,7 @@ fn good_survey_runs_and_check_predicts_it() {
     let swath = 2.0 * 300.0 * 15f64.to_radians().tan();
     assert!((summary["swath_width_m"].as_f64().unwrap() - swath).abs() < 1e-6);
     // Trajectory: one row per millisecond of the 0.4 s line, plus header.
-    let traj = std::fs::read_to_string(out.join("trajectory.csv")).unwrap();
+    let traj = std::fs::read_to_string(out.join("trajectory_true.csv")).unwrap();
     assert_eq!(traj.lines().count(), 1 + 401);
     assert!(traj.starts_with("gps_time_s,x_m,y_m,z_m,roll_deg,pitch_deg,yaw_deg"));
 
@@ -115,7 +115,7 @@ fn one_and_two_threads_write_identical_files() {
         out
     };
     let (a, b) = (run("1"), run("2"));
-    for f in ["points.las", "points.xyz", "trajectory.csv"] {
+    for f in ["points.las", "points.xyz", "trajectory_true.csv"] {
         let (x, y) = (
             std::fs::read(a.join(f)).unwrap(),
             std::fs::read(b.join(f)).unwrap(),

@@ -1,5 +1,5 @@
 //! Trajectory files: CSV with a header naming the columns, the format
-//! lidarsim writes (`trajectory.csv`), flown again as flight lines.
+//! lidarsim writes (`trajectory_true.csv`), flown again as flight lines.
 
 use std::path::Path;
 

@@ -144,9 +144,8 @@ pub fn drive(
     })
 }
 
-/// Writes the trajectory flown (`trajectory.csv`, kept under its first
-/// name, and `trajectory_true.csv`, formatted once for both) and the one
-/// the GNSS/IMU measured into `out_dir`.
+/// Writes the trajectory flown (`trajectory_true.csv`) and the one the
+/// GNSS/IMU measured (`trajectory_observed.csv`) into `out_dir`.
 fn write_trajectories(flight: &Flight, out_dir: &Path) -> Result<(), Error> {
     for observed in [false, true] {
         let paths: Vec<_> = TRAJECTORY_FILES

@@ -20,11 +20,8 @@ pub const PART_LAS: &str = "points.las";
 /// A part's record.
 pub const PART_RECORD: &str = "part.json";
 
-/// The trajectory files, by name, and whether each is the observed one
-/// (`trajectory.csv`, kept under its first name, is the flown one, as
-/// `trajectory_true.csv` is).
-pub const TRAJECTORY_FILES: [(&str, bool); 3] = [
-    ("trajectory.csv", false),
+/// The trajectory files, by name, and whether each is the observed one.
+pub const TRAJECTORY_FILES: [(&str, bool); 2] = [
     ("trajectory_true.csv", false),
     ("trajectory_observed.csv", true),
 ];
@@ -40,6 +37,8 @@ pub const RUN_FILES: [&str; 14] = [
     "points.xyz",
     "points.wdp",
     "survey.toml",
+    // Written by earlier versions as a copy of trajectory_true.csv: a run
+    // directory of theirs is still one a run wrote.
     "trajectory.csv",
     "trajectory_true.csv",
     "trajectory_observed.csv",

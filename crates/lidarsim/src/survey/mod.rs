@@ -138,7 +138,7 @@ pub struct Formats {
 pub struct OutputSettings {
     /// Point formats.
     pub formats: Formats,
-    /// Interval between rows of `trajectory.csv`, s.
+    /// Interval between rows of `trajectory_true.csv`, s.
     pub trajectory_interval_s: f64,
     /// When set, GPS times are Adjusted Standard GPS Time and the flight
     /// starts at this value (s); otherwise they are seconds since the start

@@ -119,7 +119,6 @@ const SAME_BYTES: [&str; 6] = [
     "points.las",
     "points.xyz",
     "survey.toml",
-    "trajectory.csv",
     "trajectory_true.csv",
     "trajectory_observed.csv",
 ];
