@@ -143,7 +143,12 @@ fn submit_and_compare(name: &str, follow: bool) -> (String, String) {
         .output()
         .unwrap();
     assert!(o.status.success());
-    for f in ["points.las", "points.xyz", "survey.toml", "trajectory_true.csv"] {
+    for f in [
+        "points.las",
+        "points.xyz",
+        "survey.toml",
+        "trajectory_true.csv",
+    ] {
         assert!(
             std::fs::read(whole.join(f)).unwrap() == std::fs::read(out.join(f)).unwrap(),
             "{f} differs"

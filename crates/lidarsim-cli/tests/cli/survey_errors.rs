@@ -20,7 +20,12 @@ fn assert_rejected(name: &str, text: &str, line: usize, key: &str, words: &str) 
         stderr.contains(words),
         "{name}: wanted '{words}' in {stderr}"
     );
-    for f in ["points.las", "points.xyz", "summary.json", "trajectory_true.csv"] {
+    for f in [
+        "points.las",
+        "points.xyz",
+        "summary.json",
+        "trajectory_true.csv",
+    ] {
         assert!(!out.join(f).exists(), "{name}: {f} was written");
     }
     // `check` rejects it the same way.
