@@ -86,7 +86,7 @@ fn s(p: &Path) -> &str {
 }
 
 /// The files of an unsplit run that a merge writes the same bytes of.
-const SAME: [&str; 9] = [
+const SAME: [&str; 8] = [
     "points.las",
     "points.wdp",
     "points.laz",
