@@ -200,25 +200,30 @@ pub(super) struct Lanes {
     pub lane: Vec<u32>,
 }
 
-/// One sub-ray's column values.
+/// One sub-ray's column values, but its threshold.
 pub(super) struct Lane {
     pub sx: f32,
     pub sy: f32,
     pub step: f32,
     pub top: f32,
     pub bottom: f32,
-    pub threshold: f32,
 }
 
 impl Lanes {
-    /// `n` lanes set by `lane(i)`, padded.
-    pub(super) fn fill(&mut self, n: usize, lane: impl Fn(usize) -> Lane) {
+    /// `n` lanes set by `lane(i)` and `threshold(i)`, padded. (Two loops:
+    /// the random numbers of the thresholds apart from the arithmetic of
+    /// the paths, each with its columns in registers.)
+    pub(super) fn fill(
+        &mut self,
+        n: usize,
+        lane: impl Fn(usize) -> Lane,
+        threshold: impl Fn(usize) -> f32,
+    ) {
         let padded = n.next_multiple_of(W);
         self.resize(padded);
-        // Columns cut to `n` first, so that the loop needs no bounds checks.
+        // Columns cut to `n` first, so that the loops need no bounds checks.
         let (sx, sy, step) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.step[..n]);
         let (top, bottom) = (&mut self.top[..n], &mut self.bottom[..n]);
-        let (threshold, index) = (&mut self.threshold[..n], &mut self.lane[..n]);
         for i in 0..n {
             let l = lane(i);
             sx[i] = l.sx;
@@ -226,8 +231,13 @@ impl Lanes {
             step[i] = l.step;
             top[i] = l.top;
             bottom[i] = l.bottom;
-            threshold[i] = l.threshold;
-            index[i] = i as u32;
+        }
+        for (i, (t, index)) in (self.threshold[..n].iter_mut())
+            .zip(&mut self.lane[..n])
+            .enumerate()
+        {
+            *t = threshold(i);
+            *index = i as u32;
         }
         self.depth[..padded].fill(0.0);
         self.level[..padded].fill(0.0);
@@ -495,14 +505,14 @@ mod tests {
             let drifts: Vec<(f64, f64)> = (0..n)
                 .map(|_| ((rng.uniform() - 0.5) * 1e-3, (rng.uniform() - 0.5) * 1e-3))
                 .collect();
-            lanes.fill(n, |i| Lane {
+            let lane = |i: usize| Lane {
                 sx: drifts[i].0 as f32,
                 sy: drifts[i].1 as f32,
                 step: 0.3,
                 top: 0.0,
                 bottom: -1000.0,
-                threshold: 1.0,
-            });
+            };
+            lanes.fill(n, lane, |_| 1.0);
             let level = profile.level(z).expect("inside the crown's heights");
             let dz = -200.0;
             let cell = Cell {

@@ -236,7 +236,7 @@ impl PulseMarch {
         // is open between, and its threshold (from its own stream).
         let (dirs, drifts) = (&self.dirs[..n], &self.drifts[..n]);
         let (t_start, t_stop) = (&self.t_start[..n], &self.t_stop[..n]);
-        self.lanes.fill(n, |i| {
+        let lane = |i: usize| {
             let d = dirs[i];
             let (rx, ry) = drifts[i];
             Lane {
@@ -245,9 +245,10 @@ impl PulseMarch {
                 step: (level_step / -d.z) as f32,
                 top: (d.z * t_start[i]) as f32,
                 bottom: (d.z * t_stop[i]) as f32,
-                threshold: (rng.substream(i as u64).exp1() as f32).max(f32::MIN_POSITIVE),
             }
-        });
+        };
+        let threshold = |i: usize| (rng.substream(i as u64).exp1() as f32).max(f32::MIN_POSITIVE);
+        self.lanes.fill(n, lane, threshold);
         self.transmission.clear();
         self.transmission.resize(n, 1.0);
 
