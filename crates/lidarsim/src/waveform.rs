@@ -192,11 +192,34 @@ const KERNEL_STRIDE: usize = 4;
 pub const GUARD_BINS: i64 = 4;
 const _: () = assert!(GUARD_BINS as usize >= KERNEL_STRIDE - 1);
 
-/// The widest span of returns (in bins) whose occupied bins are marked
-/// while the impulses are placed, so that the convolution visits only
-/// those; a wider span is scanned bin by bin.
+/// The spans of returns (in bins) whose occupied bins are marked while
+/// the impulses are placed, so that the convolution visits only those: a
+/// shorter span is scanned bin by bin at less cost, a wider one too (the
+/// marks' bitmap lives on the stack).
+const SCAN_BINS: usize = 16;
 const OCCUPANCY_BINS: usize = 512;
 const OCCUPANCY_WORDS: usize = OCCUPANCY_BINS / 64;
+
+/// Places each return on the time axis (window from bin `first`), its
+/// power split between the two nearest bins in proportion to its position;
+/// `mark` is told the lower bin of each.
+#[inline(always)]
+fn place_impulses(
+    returns: &[Return],
+    bins: &[f64],
+    first: i64,
+    impulses: &mut [f64],
+    mut mark: impl FnMut(usize),
+) {
+    for (r, &x) in returns.iter().zip(bins) {
+        let b = x.floor();
+        let f = x - b;
+        let i = (b as i64 - first) as usize;
+        impulses[i] += r.power * (1.0 - f);
+        impulses[i + 1] += r.power * f;
+        mark(i);
+    }
+}
 
 impl Receiver {
     /// A receiver for the given settings.
@@ -263,26 +286,23 @@ impl Receiver {
         let last = hi.floor() as i64 + 1 + ka + GUARD_BINS;
         let n = (last - first + 1) as usize;
         // Only the bins from the earliest return to one past the latest can
-        // hold an impulse; which of them do is marked in `occupied` when
-        // they are few enough.
+        // hold an impulse. Over a long span the bins of the returns are
+        // marked as they are placed, and the convolution visits those (and
+        // the bin after each) instead of scanning the span.
         let touched =
             (lo.floor() as i64 - first) as usize..(hi.floor() as i64 - first + 2) as usize;
-        let mut occupied = (touched.len() <= OCCUPANCY_BINS).then_some([0u64; OCCUPANCY_WORDS]);
-        // Impulse train.
-        let impulses = &mut out.impulses;
-        impulses.clear();
-        impulses.resize(n, 0.0);
-        for (r, &x) in returns.iter().zip(&out.return_bins) {
-            let b = x.floor();
-            let f = x - b;
-            let i = (b as i64 - first) as usize;
-            impulses[i] += r.power * (1.0 - f);
-            impulses[i + 1] += r.power * f;
-            if let Some(words) = &mut occupied {
+        let marked = (SCAN_BINS..=OCCUPANCY_BINS).contains(&touched.len());
+        let mut occupied = [0u64; OCCUPANCY_WORDS];
+        out.impulses.clear();
+        out.impulses.resize(n, 0.0);
+        let (impulses, bins) = (&mut out.impulses, &out.return_bins);
+        if marked {
+            place_impulses(returns, bins, first, impulses, |i| {
                 let j = i - touched.start;
-                words[j / 64] |= 1 << (j % 64);
-                words[(j + 1) / 64] |= 1 << ((j + 1) % 64);
-            }
+                occupied[(j / 64) % OCCUPANCY_WORDS] |= 1 << (j % 64);
+            });
+        } else {
+            place_impulses(returns, bins, first, impulses, |_| {});
         }
         // Convolution: out[b] = Σ_i impulses[i] · kernel[b − i + k0].
         out.first_bin = first;
@@ -311,17 +331,19 @@ impl Receiver {
                 }
             }
         };
-        match occupied {
-            Some(words) => {
-                for (w, &word) in words.iter().enumerate() {
-                    let mut bits = word;
-                    while bits != 0 {
-                        add(touched.start + w * 64 + bits.trailing_zeros() as usize);
-                        bits &= bits - 1;
-                    }
+        if marked {
+            // Each marked bin and the one after it, in order.
+            let mut carry = 0;
+            for (w, &word) in occupied.iter().enumerate() {
+                let mut bits = word | (word << 1) | carry;
+                carry = word >> 63;
+                while bits != 0 {
+                    add(touched.start + w * 64 + bits.trailing_zeros() as usize);
+                    bits &= bits - 1;
                 }
             }
-            None => touched.for_each(add),
+        } else {
+            touched.for_each(add);
         }
         // Atmosphere: path radiance falls with range squared.
         if self.config.atmosphere > 0.0 {
