@@ -281,19 +281,25 @@ impl Lanes {
 
     /// Keeps the open lanes only (padded again).
     pub(super) fn compact(&mut self) {
+        // Columns cut to one length, so that one check of `kept` serves all.
+        let n = self.len();
+        let (sx, sy, step) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.step[..n]);
+        let (top, bottom) = (&mut self.top[..n], &mut self.bottom[..n]);
+        let (depth, threshold) = (&mut self.depth[..n], &mut self.threshold[..n]);
+        let lane = &mut self.lane[..n];
         let mut kept = 0;
-        for i in 0..self.len() {
-            if self.top[i] == f32::NEG_INFINITY {
+        for i in 0..n {
+            if top[i] == f32::NEG_INFINITY {
                 continue;
             }
-            self.sx[kept] = self.sx[i];
-            self.sy[kept] = self.sy[i];
-            self.step[kept] = self.step[i];
-            self.top[kept] = self.top[i];
-            self.bottom[kept] = self.bottom[i];
-            self.depth[kept] = self.depth[i];
-            self.threshold[kept] = self.threshold[i];
-            self.lane[kept] = self.lane[i];
+            sx[kept] = sx[i];
+            sy[kept] = sy[i];
+            step[kept] = step[i];
+            top[kept] = top[i];
+            bottom[kept] = bottom[i];
+            depth[kept] = depth[i];
+            threshold[kept] = threshold[i];
+            lane[kept] = lane[i];
             kept += 1;
         }
         let padded = kept.next_multiple_of(W);
