@@ -180,10 +180,46 @@ pub struct Receiver {
     /// Pulse shape sampled at bin spacing; `kernel[k0]` is the peak.
     kernel: Vec<f64>,
     k0: usize,
+    /// `kernel` and zeros up to a multiple of [`KERNEL_STRIDE`] samples,
+    /// for the convolution (the window's guard bins hold the zeros).
+    padded: Vec<f64>,
 }
+
+/// Samples the convolution adds at a time: a 256-bit register of `f64`.
+const KERNEL_STRIDE: usize = 4;
 
 /// Bins of empty signal kept on both sides of a waveform window.
 pub const GUARD_BINS: i64 = 4;
+const _: () = assert!(GUARD_BINS as usize >= KERNEL_STRIDE - 1);
+
+/// The spans of returns (in bins) whose occupied bins are marked while
+/// the impulses are placed, so that the convolution visits only those: a
+/// shorter span is scanned bin by bin at less cost, a wider one too (the
+/// marks' bitmap lives on the stack).
+const SCAN_BINS: usize = 16;
+const OCCUPANCY_BINS: usize = 512;
+const OCCUPANCY_WORDS: usize = OCCUPANCY_BINS / 64;
+
+/// Places each return on the time axis (window from bin `first`), its
+/// power split between the two nearest bins in proportion to its position;
+/// `mark` is told the lower bin of each.
+#[inline(always)]
+fn place_impulses(
+    returns: &[Return],
+    bins: &[f64],
+    first: i64,
+    impulses: &mut [f64],
+    mut mark: impl FnMut(usize),
+) {
+    for (r, &x) in returns.iter().zip(bins) {
+        let b = x.floor();
+        let f = x - b;
+        let i = (b as i64 - first) as usize;
+        impulses[i] += r.power * (1.0 - f);
+        impulses[i + 1] += r.power * f;
+        mark(i);
+    }
+}
 
 impl Receiver {
     /// A receiver for the given settings.
@@ -191,13 +227,16 @@ impl Receiver {
         let (before, after) = config.pulse.support_s();
         let nb = (before / config.bin_s).ceil() as usize;
         let na = (after / config.bin_s).ceil() as usize;
-        let kernel = (0..=nb + na)
+        let kernel: Vec<f64> = (0..=nb + na)
             .map(|j| config.pulse.value((j as f64 - nb as f64) * config.bin_s))
             .collect();
+        let mut padded = kernel.clone();
+        padded.resize(kernel.len().next_multiple_of(KERNEL_STRIDE), 0.0);
         Self {
             config,
             kernel,
             k0: nb,
+            padded,
         }
     }
 
@@ -246,38 +285,65 @@ impl Receiver {
         let first = lo.floor() as i64 - k0 - GUARD_BINS;
         let last = hi.floor() as i64 + 1 + ka + GUARD_BINS;
         let n = (last - first + 1) as usize;
-        // Impulse train.
-        let impulses = &mut out.impulses;
-        impulses.clear();
-        impulses.resize(n, 0.0);
-        for (r, &x) in returns.iter().zip(&out.return_bins) {
-            let b = x.floor();
-            let f = x - b;
-            let i = (b as i64 - first) as usize;
-            impulses[i] += r.power * (1.0 - f);
-            impulses[i + 1] += r.power * f;
+        // Only the bins from the earliest return to one past the latest can
+        // hold an impulse. Over a long span the bins of the returns are
+        // marked as they are placed, and the convolution visits those (and
+        // the bin after each) instead of scanning the span.
+        let touched =
+            (lo.floor() as i64 - first) as usize..(hi.floor() as i64 - first + 2) as usize;
+        let marked = (SCAN_BINS..=OCCUPANCY_BINS).contains(&touched.len());
+        let mut occupied = [0u64; OCCUPANCY_WORDS];
+        out.impulses.clear();
+        out.impulses.resize(n, 0.0);
+        let (impulses, bins) = (&mut out.impulses, &out.return_bins);
+        if marked {
+            place_impulses(returns, bins, first, impulses, |i| {
+                let j = i - touched.start;
+                occupied[(j / 64) % OCCUPANCY_WORDS] |= 1 << (j % 64);
+            });
+        } else {
+            place_impulses(returns, bins, first, impulses, |_| {});
         }
         // Convolution: out[b] = Σ_i impulses[i] · kernel[b − i + k0].
         out.first_bin = first;
         out.samples.resize(n, 0.0);
         // The window has k0 + GUARD_BINS bins before the first impulse and
-        // the kernel's tail + GUARD_BINS after the last, so the kernel
-        // always fits.
-        // Only the bins from the earliest return to one past the latest can
-        // hold an impulse.
-        let touched =
-            (lo.floor() as i64 - first) as usize..(hi.floor() as i64 - first + 2) as usize;
-        for (i, &p) in out.impulses[touched.clone()].iter().enumerate() {
+        // the kernel's tail + GUARD_BINS after the last, so the padded
+        // kernel always fits. Impulses are added in bin order either way.
+        let mut add = |i: usize| {
+            let p = out.impulses[i];
             if p == 0.0 {
-                continue;
+                return;
             }
-            let start = i + touched.start - self.k0;
-            for (o, &k) in out.samples[start..start + self.kernel.len()]
+            // Past the kernel's end `p · 0` adds nothing (samples are sums
+            // from +0 of finite powers, never −0).
+            let start = i - self.k0;
+            let window = &mut out.samples[start..start + self.padded.len()];
+            let kernel = self.padded.as_chunks::<KERNEL_STRIDE>().0;
+            for (o, k) in window
+                .as_chunks_mut::<KERNEL_STRIDE>()
+                .0
                 .iter_mut()
-                .zip(&self.kernel)
+                .zip(kernel)
             {
-                *o += p * k;
+                for j in 0..KERNEL_STRIDE {
+                    o[j] += p * k[j];
+                }
             }
+        };
+        if marked {
+            // Each marked bin and the one after it, in order.
+            let mut carry = 0;
+            for (w, &word) in occupied.iter().enumerate() {
+                let mut bits = word | (word << 1) | carry;
+                carry = word >> 63;
+                while bits != 0 {
+                    add(touched.start + w * 64 + bits.trailing_zeros() as usize);
+                    bits &= bits - 1;
+                }
+            }
+        } else {
+            touched.for_each(add);
         }
         // Atmosphere: path radiance falls with range squared.
         if self.config.atmosphere > 0.0 {

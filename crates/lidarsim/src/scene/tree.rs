@@ -448,6 +448,38 @@ impl CrownProfile {
         })
     }
 
+    /// A relative depth `χ_c` such that at every `χ ≤ χ_c` the envelope's
+    /// radius, as [`CrownProfile::envelope`] works it out, is below
+    /// `radius_m` (it grows with `χ`); `None` when even the top's is not.
+    /// Found by inverting `r(χ) = a + b·χ^c` and checked with the
+    /// envelope's own arithmetic, a little short of the root.
+    pub fn depth_narrower_than(&self, radius_m: f64) -> Option<f64> {
+        let c = &self.crown;
+        // Margins far above the rounding of the envelope's arithmetic.
+        let below = radius_m - 1e-9 * (1.0 + radius_m.abs());
+        let radius = |chi: f64| c.a + c.b * self.shape.at(chi);
+        // (Not below when either is NaN.)
+        if radius(0.0).partial_cmp(&below) != Some(std::cmp::Ordering::Less) {
+            return None;
+        }
+        let u = (below - c.a) / c.b;
+        let root = match self.shape {
+            ShapeFactor::Linear => u,
+            ShapeFactor::Sqrt => u * u,
+            ShapeFactor::Table(_) | ShapeFactor::Pow(_) => u.powf(1.0 / c.c),
+        };
+        let mut chi = (root * (1.0 - 1e-6)).min(1.0);
+        // Short of the root by more than the inverse's error, in a few
+        // halvings at most.
+        for _ in 0..60 {
+            if radius(chi) < below {
+                return Some(chi);
+            }
+            chi *= 0.5;
+        }
+        Some(0.0)
+    }
+
     /// [`CrownProfile::level`] where the envelope is `e`.
     #[inline]
     pub fn level_within(&self, e: Envelope) -> CrownLevel {
@@ -692,6 +724,40 @@ mod tests {
             assert!(!crown.contains(DVec3::new(10.0, 20.0 + r + 1e-6, z)));
         }
         assert!((crown.max_radius_m() - Species::Pine.crown_radius_m(0.25)).abs() < 1e-12);
+    }
+
+    /// Above the depth it gives, every level's envelope is narrower than
+    /// the radius asked for, and that depth lies just short of where the
+    /// envelope reaches it (every shape: the pine's table, the spruce's,
+    /// the birch's square root).
+    #[test]
+    fn a_crown_is_narrower_than_a_radius_above_the_depth_it_gives() {
+        for species in [Species::Pine, Species::Spruce, Species::Birch] {
+            let spec = TreeSpec::new(DVec3::ZERO, species, 0.3, 20.0, 8.0);
+            let profile = spec.crown(&FoliageSettings::default()).profile();
+            let (zb, zt) = profile.crown().z_range();
+            let top = profile.envelope(zt).expect("the top").radius;
+            assert_eq!(profile.depth_narrower_than(top), None);
+            for step in 1..=40 {
+                let radius = top + step as f64 * 0.1;
+                let chi = profile.depth_narrower_than(radius).expect("below the top");
+                for k in 0..=1000 {
+                    let z = zt - chi * (zt - zb) * k as f64 / 1000.0;
+                    let r = profile.envelope(z).expect("inside").radius;
+                    assert!(r < radius, "{species:?}: {r} at {z} for {radius}");
+                }
+                // Just short of the root (or the whole crown).
+                let deeper = (chi + 1e-4).min(1.0);
+                let r = profile
+                    .envelope(zt - deeper * (zt - zb))
+                    .expect("inside")
+                    .radius;
+                assert!(
+                    chi == 1.0 || r >= radius - 1e-3,
+                    "{species:?}: {r} < {radius}"
+                );
+            }
+        }
     }
 
     #[test]

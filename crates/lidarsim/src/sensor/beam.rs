@@ -84,6 +84,10 @@ pub struct BeamPattern {
     /// Stratified points of the unit disk for the fine samples, this
     /// pattern's own jitter.
     disk: Vec<[f64; 2]>,
+    /// The fine samples of every cell, [`FINE_PER_CELL`] a cell in
+    /// sub-ray order (empty when cells are not refined): worked out once
+    /// with the pattern, not for each pulse that refines a cell.
+    fine: Vec<(DVec3, f64)>,
     /// 1/e² half-angle of the beam across (x), rad.
     w: f64,
     /// Ratio of the beam's along (y) to its across (x) divergence: the
@@ -180,16 +184,25 @@ impl BeamPattern {
                 concentric(a, b)
             })
             .collect();
-        Self {
+        let mut pattern = Self {
             offsets,
             base,
             share,
             cell_radius,
             neighbours,
             disk,
+            fine: Vec::new(),
             w,
             stretch_y,
+        };
+        if refined {
+            let mut fine = Vec::with_capacity(n * FINE_PER_CELL);
+            for i in 0..n {
+                pattern.work_out_fine_samples(i, &mut fine);
+            }
+            pattern.fine = fine;
         }
+        pattern
     }
 
     /// The single central ray.
@@ -201,6 +214,7 @@ impl BeamPattern {
             cell_radius: Vec::new(),
             neighbours: Vec::new(),
             disk: Vec::new(),
+            fine: Vec::new(),
             w: 0.0,
             stretch_y: 1.0,
         }
@@ -251,6 +265,11 @@ impl BeamPattern {
     /// evenly over the cell's disk and weighted by the beam's irradiance at
     /// each, the shares adding up to the sub-ray's.
     pub fn fine_samples(&self, i: usize, out: &mut Vec<(DVec3, f64)>) {
+        out.extend_from_slice(&self.fine[i * FINE_PER_CELL..(i + 1) * FINE_PER_CELL]);
+    }
+
+    /// [`BeamPattern::fine_samples`] worked out, for the pattern's table.
+    fn work_out_fine_samples(&self, i: usize, out: &mut Vec<(DVec3, f64)>) {
         let o = self.offsets[i];
         let rho = self.cell_radius[i];
         let start = out.len();

@@ -44,13 +44,18 @@ enum Field32 {
     },
 }
 
-/// `floor(v)` as an integer for `|v| < 2³¹`, by truncation and a
-/// correction below zero: one instruction each in the lanes, where a
-/// `floor` without SSE4.1 would be a call.
+/// `floor(v)` as an integer for `|v| < 2²²`: adding `1.5·2²³` rounds `v`
+/// to an integer held in the low bits of the sum, less one where that
+/// rounded up. Only float and integer arithmetic, which the lanes
+/// vectorise (a float-to-integer `as` saturates, lane by lane). Beyond
+/// `2²²` cells a lane lies outside any envelope, where the cell is not
+/// looked at.
 #[inline(always)]
 fn floor_i32(v: f32) -> i32 {
-    let t = v as i32;
-    t - i32::from((t as f32) > v)
+    const MAGIC: f32 = 12_582_912.0;
+    let sum = v + MAGIC;
+    let rounded = (sum.to_bits() as i32).wrapping_sub(MAGIC.to_bits() as i32);
+    rounded - i32::from(sum - MAGIC > v)
 }
 
 impl Level32 {
@@ -195,25 +200,30 @@ pub(super) struct Lanes {
     pub lane: Vec<u32>,
 }
 
-/// One sub-ray's column values.
+/// One sub-ray's column values, but its threshold.
 pub(super) struct Lane {
     pub sx: f32,
     pub sy: f32,
     pub step: f32,
     pub top: f32,
     pub bottom: f32,
-    pub threshold: f32,
 }
 
 impl Lanes {
-    /// `n` lanes set by `lane(i)`, padded.
-    pub(super) fn fill(&mut self, n: usize, lane: impl Fn(usize) -> Lane) {
+    /// `n` lanes set by `lane(i)` and `threshold(i)`, padded. (Two loops:
+    /// the random numbers of the thresholds apart from the arithmetic of
+    /// the paths, each with its columns in registers.)
+    pub(super) fn fill(
+        &mut self,
+        n: usize,
+        lane: impl Fn(usize) -> Lane,
+        threshold: impl Fn(usize) -> f32,
+    ) {
         let padded = n.next_multiple_of(W);
         self.resize(padded);
-        // Columns cut to `n` first, so that the loop needs no bounds checks.
+        // Columns cut to `n` first, so that the loops need no bounds checks.
         let (sx, sy, step) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.step[..n]);
         let (top, bottom) = (&mut self.top[..n], &mut self.bottom[..n]);
-        let (threshold, index) = (&mut self.threshold[..n], &mut self.lane[..n]);
         for i in 0..n {
             let l = lane(i);
             sx[i] = l.sx;
@@ -221,8 +231,13 @@ impl Lanes {
             step[i] = l.step;
             top[i] = l.top;
             bottom[i] = l.bottom;
-            threshold[i] = l.threshold;
-            index[i] = i as u32;
+        }
+        for (i, (t, index)) in (self.threshold[..n].iter_mut())
+            .zip(&mut self.lane[..n])
+            .enumerate()
+        {
+            *t = threshold(i);
+            *index = i as u32;
         }
         self.depth[..padded].fill(0.0);
         self.level[..padded].fill(0.0);
@@ -266,19 +281,25 @@ impl Lanes {
 
     /// Keeps the open lanes only (padded again).
     pub(super) fn compact(&mut self) {
+        // Columns cut to one length, so that one check of `kept` serves all.
+        let n = self.len();
+        let (sx, sy, step) = (&mut self.sx[..n], &mut self.sy[..n], &mut self.step[..n]);
+        let (top, bottom) = (&mut self.top[..n], &mut self.bottom[..n]);
+        let (depth, threshold) = (&mut self.depth[..n], &mut self.threshold[..n]);
+        let lane = &mut self.lane[..n];
         let mut kept = 0;
-        for i in 0..self.len() {
-            if self.top[i] == f32::NEG_INFINITY {
+        for i in 0..n {
+            if top[i] == f32::NEG_INFINITY {
                 continue;
             }
-            self.sx[kept] = self.sx[i];
-            self.sy[kept] = self.sy[i];
-            self.step[kept] = self.step[i];
-            self.top[kept] = self.top[i];
-            self.bottom[kept] = self.bottom[i];
-            self.depth[kept] = self.depth[i];
-            self.threshold[kept] = self.threshold[i];
-            self.lane[kept] = self.lane[i];
+            sx[kept] = sx[i];
+            sy[kept] = sy[i];
+            step[kept] = step[i];
+            top[kept] = top[i];
+            bottom[kept] = bottom[i];
+            depth[kept] = depth[i];
+            threshold[kept] = threshold[i];
+            lane[kept] = lane[i];
             kept += 1;
         }
         let padded = kept.next_multiple_of(W);
@@ -338,18 +359,15 @@ impl Lanes {
         rho: impl Fn(&Level32, f32, f32) -> f32,
         combine: impl Fn(f32, f32) -> f32,
     ) {
-        let (px, py) = cell.centre;
-        let (l, k, dz) = (&cell.level, cell.k, cell.dz);
         let n = self.len();
-        let (sx, sy, step) = (&self.sx[..n], &self.sy[..n], &self.step[..n]);
-        let (top, bottom) = (&self.top[..n], &self.bottom[..n]);
-        let level = &mut self.level[..n];
-        for i in 0..n {
-            let (dx, dy) = (px + sx[i] * dz, py + sy[i] * dz);
-            let open = (dz > bottom[i]) & (dz <= top[i]);
-            let tau = k * rho(l, dx, dy) * step[i];
-            level[i] = combine(level[i], if open { tau } else { 0.0 });
-        }
+        let paths = Paths {
+            sx: &self.sx[..n],
+            sy: &self.sy[..n],
+            step: &self.step[..n],
+            top: &self.top[..n],
+            bottom: &self.bottom[..n],
+        };
+        level_depths(&mut self.level[..n], &paths, cell, rho, combine);
     }
 
     /// Lane `i`'s depth in `cell` alone: the arithmetic of
@@ -391,11 +409,78 @@ impl Lanes {
     }
 }
 
+/// The columns that say where each lane is at a level and whether it is
+/// open there.
+struct Paths<'a> {
+    sx: &'a [f32],
+    sy: &'a [f32],
+    step: &'a [f32],
+    top: &'a [f32],
+    bottom: &'a [f32],
+}
+
+/// The loop of [`Lanes::with_cell`], a register of lanes at a time: each
+/// register's depths are worked out into an array of its own before they
+/// are combined into `level`, so the compiler needs no check that the
+/// columns read do not overlap it.
+#[inline(always)]
+fn level_depths(
+    level: &mut [f32],
+    p: &Paths,
+    cell: &Cell,
+    rho: impl Fn(&Level32, f32, f32) -> f32,
+    combine: impl Fn(f32, f32) -> f32,
+) {
+    let (px, py) = cell.centre;
+    let (l, k, dz) = (&cell.level, cell.k, cell.dz);
+    // The columns' lengths are multiples of W: no remainder.
+    let level = level.as_chunks_mut::<W>().0;
+    let m = level.len();
+    let (sx, sy, step) = (
+        &p.sx.as_chunks::<W>().0[..m],
+        &p.sy.as_chunks::<W>().0[..m],
+        &p.step.as_chunks::<W>().0[..m],
+    );
+    let (top, bottom) = (
+        &p.top.as_chunks::<W>().0[..m],
+        &p.bottom.as_chunks::<W>().0[..m],
+    );
+    for c in 0..m {
+        let mut tau = [0.0f32; W];
+        for j in 0..W {
+            let (dx, dy) = (px + sx[c][j] * dz, py + sy[c][j] * dz);
+            let open = (dz > bottom[c][j]) & (dz <= top[c][j]);
+            let t = k * rho(l, dx, dy) * step[c][j];
+            tau[j] = if open { t } else { 0.0 };
+        }
+        for (a, t) in level[c].iter_mut().zip(tau) {
+            *a = combine(*a, t);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::DVec3;
     use crate::scene::{FoliageSettings, Species, TreeSpec};
+
+    /// The lanes' floor is `f32::floor` up to `2²²`, at and beside every
+    /// kind of value: integers, halves (where rounding ties), a step
+    /// either side of them, zeros.
+    #[test]
+    fn floor_i32_is_floor() {
+        let mut values = vec![0.0f32, -0.0, 0.3, -0.3, 4_194_303.5, -4_194_303.5];
+        for k in (-4_194_303i32..4_194_303).step_by(997).chain(-3000..3000) {
+            let x = k as f32;
+            for v in [x, x + 0.5, x - 0.5, x + 0.25] {
+                values.extend([v, v.next_up(), v.next_down()]);
+            }
+        }
+        for v in values.into_iter().filter(|v| v.abs() < 4_194_304.0) {
+            assert_eq!(floor_i32(v), v.floor() as i32, "{v}");
+        }
+    }
 
     /// The lanes' `f32` density agrees with the crown's own `f64` density
     /// at points all over a crown, and a lane's depth alone is, to the
@@ -426,14 +511,14 @@ mod tests {
             let drifts: Vec<(f64, f64)> = (0..n)
                 .map(|_| ((rng.uniform() - 0.5) * 1e-3, (rng.uniform() - 0.5) * 1e-3))
                 .collect();
-            lanes.fill(n, |i| Lane {
+            let lane = |i: usize| Lane {
                 sx: drifts[i].0 as f32,
                 sy: drifts[i].1 as f32,
                 step: 0.3,
                 top: 0.0,
                 bottom: -1000.0,
-                threshold: 1.0,
-            });
+            };
+            lanes.fill(n, lane, |_| 1.0);
             let level = profile.level(z).expect("inside the crown's heights");
             let dz = -200.0;
             let cell = Cell {

@@ -13,8 +13,10 @@
 //! over sub-rays without branches that the compiler vectorises, eight
 //! sub-rays to a register in `f32` (offsets of metres from the stem, exact
 //! to micrometres). A crown whose envelope the whole pulse misses at a
-//! level is skipped after one test of the pulse's centre, and a level that
-//! no envelope reaches costs nothing more.
+//! level is skipped after one test of the pulse's centre; above the depth
+//! where its envelope first grows wide enough for the pulse to reach it
+//! (worked out once per pulse, [`first_reach`]) it is not looked at, and a
+//! level that no envelope can reach costs nothing more.
 //!
 //! Each sub-ray draws one threshold `E ~ Exp(1)` and is intercepted in the
 //! cell around the first level where its accumulated optical depth
@@ -58,6 +60,9 @@ struct Met {
     profile: CrownProfile,
     z_top: f64,
     z_base: f64,
+    /// The highest level where the pulse may reach the envelope (not only
+    /// its bounding cylinder): above it the crown is not looked at.
+    z_reach: f64,
 }
 
 /// A crown whose envelope the pulse reaches at the current level.
@@ -204,7 +209,7 @@ impl PulseMarch {
         // is open between, and its threshold (from its own stream).
         let (dirs, drifts) = (&self.dirs[..n], &self.drifts[..n]);
         let (t_start, t_stop) = (&self.t_start[..n], &self.t_stop[..n]);
-        self.lanes.fill(n, |i| {
+        let lane = |i: usize| {
             let d = dirs[i];
             let (rx, ry) = drifts[i];
             Lane {
@@ -213,9 +218,10 @@ impl PulseMarch {
                 step: (level_step / -d.z) as f32,
                 top: (d.z * t_start[i]) as f32,
                 bottom: (d.z * t_stop[i]) as f32,
-                threshold: (rng.substream(i as u64).exp1() as f32).max(f32::MIN_POSITIVE),
             }
-        });
+        };
+        let threshold = |i: usize| (rng.substream(i as u64).exp1() as f32).max(f32::MIN_POSITIVE);
+        self.lanes.fill(n, lane, threshold);
         self.transmission.clear();
         self.transmission.resize(n, 1.0);
 
@@ -239,23 +245,28 @@ impl PulseMarch {
             while below < self.met.len() && self.met[below].z_top >= z {
                 below += 1;
             }
-            if !self.met[..below].iter().any(|m| m.z_base <= z) {
-                // Between crowns: on to the first level under the next top.
-                match self.met.get(below) {
-                    Some(next) => {
-                        let to = ((z_first - next.z_top) / level_step - phase).ceil();
-                        j = j.max(to as u64);
-                        continue;
-                    }
-                    None => break,
+            if !self.met[..below]
+                .iter()
+                .any(|m| m.z_base <= z && z <= m.z_reach)
+            {
+                // No envelope within reach: on to the first level under the
+                // next height where one may be.
+                let next = (self.met.iter().map(|m| m.z_reach))
+                    .filter(|&r| r < z)
+                    .fold(f64::NEG_INFINITY, f64::max);
+                if next == f64::NEG_INFINITY {
+                    break;
                 }
+                let to = ((z_first - next) / level_step - phase).ceil();
+                j = j.max(to as u64);
+                continue;
             }
             let dz = z - o.z;
             let reach = spread * dz.abs();
             // The crowns whose envelope the pulse reaches at this level.
             self.rows.clear();
             for (mi, m) in self.met[..below].iter().enumerate() {
-                if m.z_base > z {
+                if m.z_base > z || z > m.z_reach {
                     continue;
                 }
                 let crown = m.profile.crown();
@@ -359,7 +370,8 @@ impl PulseMarch {
     /// The crowns among `volumes` the pulse from `o` meets, into `met`
     /// (in the order of `volumes`), each between the heights where the
     /// pulse can reach its bounding cylinder: where the centre line
-    /// `o + s·(−c_x, −c_y, −1)` comes within `spread·s` of it.
+    /// `o + s·(−c_x, −c_y, −1)` comes within `spread·s` of it; and the
+    /// highest level where it can reach the envelope itself.
     fn meet_crowns(&mut self, scene: &Scene, o: DVec3, volumes: &[u32], c: &CentreLine) {
         let line = Ray {
             origin: o,
@@ -376,11 +388,14 @@ impl PulseMarch {
             let (z_base, z_top) = crown.z_range();
             let (z_base, z_top) = (z_base.max(o.z - s1), z_top.min(o.z - s0));
             if z_base < z_top {
+                let profile = crown.profile();
+                let z_reach = first_reach(&profile, o, (c.cx, c.cy), c.spread, (z_base, z_top));
                 self.met.push(Met {
                     prim,
-                    profile: crown.profile(),
+                    profile,
                     z_top,
                     z_base,
+                    z_reach,
                 });
             }
         }
@@ -426,6 +441,44 @@ impl PulseMarch {
             transmission: self.transmission[lane],
         }
     }
+}
+
+/// The height below which a pulse from `o` may reach the envelope of
+/// `profile`'s crown between `heights` (lowest first), and above which it
+/// cannot: where the envelope is narrower than the least horizontal
+/// distance from the stem to the pulse's centre line (drifting by `drift`
+/// per metre of height) less the pulse's widest reach there (`spread` per
+/// metre below the origin). At levels above it the march's own test
+/// (`beyond`) would find the envelope out of reach, by a margin far above
+/// rounding.
+fn first_reach(
+    profile: &CrownProfile,
+    o: DVec3,
+    drift: (f64, f64),
+    spread: f64,
+    heights: (f64, f64),
+) -> f64 {
+    let crown = profile.crown();
+    let (ax, ay) = crown.axis();
+    let (px, py) = (o.x - ax, o.y - ay);
+    let (cx, cy) = drift;
+    let (dz_low, dz_high) = (heights.0 - o.z, heights.1 - o.z);
+    // The centre line's nearest point to the stem within the heights.
+    let c2 = cx * cx + cy * cy;
+    let t = if c2 > 0.0 {
+        (-(px * cx + py * cy) / c2).clamp(dz_low, dz_high)
+    } else {
+        dz_low
+    };
+    let nearest = (px + cx * t).hypot(py + cy * t);
+    let narrower = nearest - spread * -dz_low - 1e-6 * (1.0 + nearest);
+    let Some(chi) = profile.depth_narrower_than(narrower) else {
+        return heights.1;
+    };
+    // Above z_top − χ_c·(z_top − z_base) the envelope is narrower.
+    let (z_base, z_top) = crown.z_range();
+    let depth = chi * (z_top - z_base) * (1.0 - 1e-9) - 1e-9;
+    (z_top - depth.max(0.0)).min(heights.1)
 }
 
 /// The crown of volume primitive `prim`.
