@@ -262,39 +262,7 @@ impl PulseMarch {
                 continue;
             }
             let dz = z - o.z;
-            let reach = spread * dz.abs();
-            // The crowns whose envelope the pulse reaches at this level.
-            self.rows.clear();
-            for (mi, m) in self.met[..below].iter().enumerate() {
-                if m.z_base > z || z > m.z_reach {
-                    continue;
-                }
-                let crown = m.profile.crown();
-                let (ax, ay) = crown.axis();
-                let (px, py) = (o.x - ax + cx * dz, o.y - ay + cy * dz);
-                // Squared: is the centre farther than `radius + reach`?
-                let centre_sq = px * px + py * py;
-                let beyond = |radius: f64| centre_sq > (radius + reach) * (radius + reach);
-                if beyond(crown.max_radius_m()) {
-                    continue;
-                }
-                let Some(envelope) = m.profile.envelope(z) else {
-                    continue;
-                };
-                if beyond(envelope.radius) {
-                    continue;
-                }
-                let level = m.profile.level_within(envelope);
-                self.rows.push(Row {
-                    met: mi,
-                    cell: Cell {
-                        level: Level32::new(&level),
-                        centre: (px as f32, py as f32),
-                        k: crown.extinction_per_m as f32,
-                        dz: dz as f32,
-                    },
-                });
-            }
+            self.gather_rows(o, (cx, cy), z, below, spread * dz.abs());
             let Some((first, rest)) = self.rows.split_first() else {
                 continue;
             };
@@ -329,6 +297,46 @@ impl PulseMarch {
             if let Fate::Passed { transmission } = fate {
                 *transmission = kept;
             }
+        }
+    }
+
+    /// The crowns among the first `below` met whose envelope the pulse
+    /// from `o`, its centre line drifting `(cx, cy)` per metre, reaches at
+    /// level `z` with its widest `reach` there, into `rows`: each with the
+    /// cell the level cuts from its crown.
+    #[inline]
+    fn gather_rows(&mut self, o: DVec3, (cx, cy): (f64, f64), z: f64, below: usize, reach: f64) {
+        let dz = z - o.z;
+        self.rows.clear();
+        for (mi, m) in self.met[..below].iter().enumerate() {
+            if m.z_base > z || z > m.z_reach {
+                continue;
+            }
+            let crown = m.profile.crown();
+            let (ax, ay) = crown.axis();
+            let (px, py) = (o.x - ax + cx * dz, o.y - ay + cy * dz);
+            // Squared: is the centre farther than `radius + reach`?
+            let centre_sq = px * px + py * py;
+            let beyond = |radius: f64| centre_sq > (radius + reach) * (radius + reach);
+            if beyond(crown.max_radius_m()) {
+                continue;
+            }
+            let Some(envelope) = m.profile.envelope(z) else {
+                continue;
+            };
+            if beyond(envelope.radius) {
+                continue;
+            }
+            let level = m.profile.level_within(envelope);
+            self.rows.push(Row {
+                met: mi,
+                cell: Cell {
+                    level: Level32::new(&level),
+                    centre: (px as f32, py as f32),
+                    k: crown.extinction_per_m as f32,
+                    dz: dz as f32,
+                },
+            });
         }
     }
 
