@@ -26,7 +26,7 @@ use crate::radiometry::surface_return;
 use crate::rng::{Purpose, Stream};
 use crate::scene::{MEDIUM_VEGETATION_MAX_M, Shape, SurfaceClass};
 use crate::sensor::Pose;
-use crate::sensor::beam::{BeamPattern, FINE_PER_CELL};
+use crate::sensor::beam::{BeamPattern, Fineness};
 use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
 use crate::waveform::Return;
@@ -54,17 +54,32 @@ struct Emission {
     to_world: DMat3,
 }
 
+/// How stage 2 sampled a pulse's beam.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Sampling {
+    /// By the pattern's sub-rays, each carrying the pattern's share.
+    Coarse,
+    /// Some cells sampled again: their fine samples carry each cell's own
+    /// energy ([`BeamPattern::cell_energy`]), and the other sub-rays what
+    /// is left, `share` each, so that the pulse's energy stays whole.
+    Refined {
+        /// Energy share of each sub-ray whose cell is not sampled again.
+        share: f64,
+    },
+}
+
 /// The sub-rays of a pulse in emission order: the pattern's, each cell
 /// sampled again replaced by its fine samples.
 struct Rays<'a> {
     dirs: &'a [DVec3],
     trace: &'a PulseTrace,
-    /// Which cells are sampled again (empty when none is).
-    refine: &'a [bool],
+    /// How finely each cell is sampled again, if it is (empty when none
+    /// is).
+    refine: &'a [Option<Fineness>],
     fine: &'a [(DVec3, f64)],
     fine_dirs: &'a [DVec3],
     fine_trace: &'a PulseTrace,
-    /// Energy share of a pattern sub-ray.
+    /// Energy share of a pattern sub-ray not sampled again.
     share: f64,
 }
 
@@ -75,8 +90,8 @@ impl Rays<'_> {
     fn each(&self, mut f: impl FnMut(&DVec3, f64, Option<Hit>)) {
         let mut j = 0;
         for (i, dir) in self.dirs.iter().enumerate() {
-            if self.refine.get(i).copied().unwrap_or(false) {
-                for _ in 0..FINE_PER_CELL {
+            if let Some(fineness) = self.refine.get(i).copied().flatten() {
+                for _ in 0..fineness.rays() {
                     let (dir, share) = (&self.fine_dirs[j], self.fine[j].1);
                     f(dir, share, self.fine_trace.hit(j));
                     j += 1;
@@ -108,8 +123,8 @@ impl Simulator<'_> {
         };
         let c = usize::from(em.channel.0);
         let pattern = self.beams[c.min(self.beams.len() - 1)].for_pulse(|| stream(Purpose::Beam));
-        let refined = self.cast(&em, pattern, scratch);
-        self.gather_returns(&em, pattern, refined, scratch, &stream);
+        let sampling = self.cast(&em, pattern, scratch);
+        self.gather_returns(&em, pattern, sampling, scratch, &stream);
         if scratch.returns.is_empty() {
             scratch.waveform.samples.clear();
             scratch.echoes.clear();
@@ -166,9 +181,9 @@ impl Simulator<'_> {
 
     /// Stage 2: the sub-rays of `pattern`, in the world frame, cast as one
     /// pulse; the cells across a discontinuity the receiver resolves
-    /// sampled again, finely (beam.rs). Returns whether any was.
+    /// sampled again, finely (beam.rs).
     #[inline(always)]
-    fn cast(&self, em: &Emission, pattern: &BeamPattern, scratch: &mut Scratch) -> bool {
+    fn cast(&self, em: &Emission, pattern: &BeamPattern, scratch: &mut Scratch) -> Sampling {
         let Scratch {
             dirs,
             trace,
@@ -188,17 +203,27 @@ impl Simulator<'_> {
         self.caster
             .trace_pulse(em.origin, dirs, t_min, t_max, trace);
         let refined = pattern.refined() && self.mark_discontinuities(pattern, trace, refine);
-        if refined {
-            fine.clear();
-            for (i, _) in refine.iter().enumerate().filter(|(_, r)| **r) {
-                pattern.fine_samples(i, fine);
-            }
-            fine_dirs.clear();
-            fine_dirs.extend(fine.iter().map(|(d, _)| to_world * *d));
-            self.caster
-                .trace_pulse(em.origin, fine_dirs, t_min, t_max, fine_trace);
+        if !refined {
+            return Sampling::Coarse;
         }
-        refined
+        fine.clear();
+        let (mut left, mut coarse) = (1.0, 0usize);
+        for (i, fineness) in refine.iter().enumerate() {
+            match *fineness {
+                Some(fineness) => {
+                    pattern.fine_samples(i, fineness, fine);
+                    left -= pattern.cell_energy(i);
+                }
+                None => coarse += 1,
+            }
+        }
+        fine_dirs.clear();
+        fine_dirs.extend(fine.iter().map(|(d, _)| to_world * *d));
+        self.caster
+            .trace_pulse(em.origin, fine_dirs, t_min, t_max, fine_trace);
+        Sampling::Refined {
+            share: left.max(0.0) / coarse.max(1) as f64,
+        }
     }
 
     /// Stage 3: each sub-ray through the crowns on its way (the
@@ -209,7 +234,7 @@ impl Simulator<'_> {
         &self,
         em: &Emission,
         pattern: &BeamPattern,
-        refined: bool,
+        sampling: Sampling,
         scratch: &mut Scratch,
         stream: &impl Fn(Purpose) -> Stream,
     ) {
@@ -247,7 +272,10 @@ impl Simulator<'_> {
                 mat.incidence_exponent,
             )
         };
-        let share = pattern.share();
+        let (refined, share) = match sampling {
+            Sampling::Coarse => (false, pattern.share()),
+            Sampling::Refined { share } => (true, share),
+        };
         if !refined && trace.has_no_volumes() {
             // No crown on any sub-ray's way and no cell sampled again:
             // every sub-ray brings all its energy to its surface.
@@ -503,7 +531,7 @@ impl Simulator<'_> {
         &self,
         pattern: &BeamPattern,
         trace: &PulseTrace,
-        refine: &mut Vec<bool>,
+        refine: &mut Vec<Option<Fineness>>,
     ) -> bool {
         let n = pattern.len();
         // The usual case: every sub-ray meets one continuous surface.
@@ -512,7 +540,7 @@ impl Simulator<'_> {
             return false;
         }
         refine.clear();
-        refine.resize(n, false);
+        refine.resize(n, None);
         let differ = |a: f64, b: f64| {
             a.is_finite() != b.is_finite()
                 || (a.is_finite() && (a - b).abs() > self.discontinuity_m)
@@ -522,8 +550,8 @@ impl Simulator<'_> {
             let a = trace.range(i);
             for j in pattern.neighbours(i) {
                 if differ(a, trace.range(j)) {
-                    refine[i] = true;
-                    refine[j] = true;
+                    refine[i] = Some(Fineness::Rays16);
+                    refine[j] = Some(Fineness::Rays16);
                     any = true;
                 }
             }

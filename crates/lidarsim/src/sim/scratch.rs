@@ -17,8 +17,8 @@ pub struct Scratch {
     pub(super) dirs: Vec<DVec3>,
     /// Their closest hits and the crowns on their way.
     pub(super) trace: PulseTrace,
-    /// Which sub-rays' cells are sampled again.
-    pub(super) refine: Vec<bool>,
+    /// How finely each sub-ray's cell is sampled again, if it is.
+    pub(super) refine: Vec<Option<crate::sensor::beam::Fineness>>,
     /// The fine samples of those cells: undeflected direction and share.
     pub(super) fine: Vec<(DVec3, f64)>,
     /// Their directions in the world frame.
