@@ -12,7 +12,7 @@ if [ ! -x "$venv/bin/python" ]; then
   python3 -m venv "$venv"
 fi
 "$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
-  "maturin>=1.9.4,<2" "pytest>=7" "numpy>=1.21" "laspy>=2.5" "lazrs>=0.6" "rasterio>=1.3" "distributed>=2023.1"
+  "maturin>=1.9.4,<2" "pytest>=7" "numpy>=1.21" "laspy>=2.5" "lazrs>=0.6" "rasterio>=1.3" "distributed>=2023.1" "matplotlib>=3.5"
 
 cargo clippy -p lidarsim-py --all-targets --quiet -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc -p lidarsim-py --no-deps --quiet

@@ -12,7 +12,9 @@ Usage:
 Writes WORK/twin (the twin), WORK/run (its flight), WORK/compare
 (compare.json, compare.html), WORK/figures.md (the tables) and
 IMG/twin-*.png. Needs numpy and matplotlib (scripts/check_python.sh puts
-them into target/pyenv).
+them into target/pyenv). It also flies the twin with the physics of
+before issue 46 and with the pine and spruce presets (VARIANTS) and
+tabulates what the physics decides.
 """
 
 import argparse
@@ -151,6 +153,53 @@ def figures(c, img):
     fig.savefig(img / "twin-cover-maps.png", dpi=90)
 
 
+# The physics a variant flies with: the twin's survey with these keys.
+VARIANTS = [
+    ("specification's crowns, waveform receiver (before issue 46)", "pine",
+     {"vegetation": 'foliage = "specification"', "scanner": 'echo_detection = "waveform"'}),
+    ("physical crowns, discrete receiver (the defaults), pine", "pine", {}),
+    ("physical crowns, discrete receiver (the defaults), spruce", "spruce", {}),
+]
+
+# What the physics decides, compared across the variants.
+PHYSICS = ["returns_per_pulse", "single_return_share", "canopy_single_share", "canopy_cover",
+           "first_p50", "first_p95", "intensity_ratio"]
+
+
+def with_keys(text, keys):
+    """The survey `text` with `keys` added at the top of their tables."""
+    for table_name, lines in keys.items():
+        head = f"[{table_name}]\n"
+        text = text.replace(head, head + lines + "\n", 1) if head in text else text + "\n" + head + lines + "\n"
+    return text
+
+
+def variants(args):
+    """Each variant twinned, flown and compared; a table of what the
+    physics decides, real against each."""
+    rows, real = [], None
+    for name, species, keys in VARIANTS:
+        work = args.work / ("variant-" + species + ("-before" if keys else ""))
+        run([args.bin, "twin", args.scan, "-o", work / "twin", "--species", species])
+        survey = work / "twin" / "survey.toml"
+        survey.write_text(with_keys(survey.read_text(), keys))
+        run([args.bin, "run", survey, "-o", work / "run"])
+        run([args.bin, "compare", args.scan, work / "run", "-o", work / "compare",
+             "--cell-m", args.cell_m, "--labels", "real,twin"])
+        c = json.loads((work / "compare" / "compare.json").read_text())
+        real = c["a"]["metrics"]
+        rows.append([name] + [fmt(k, c["b"]["metrics"][k]) for k in PHYSICS])
+    rows.insert(0, ["the real scan"] + [fmt(k, real[k]) for k in PHYSICS])
+    return table(rows, ["flown with"] + PHYSICS)
+
+
+def fmt(key, v):
+    if v is None:
+        return "–"
+    share = key.endswith("share") or key in ("canopy_cover",)
+    return f"{100 * v:.1f} %" if share else f"{v:.2f}"
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--scan", required=True, type=Path)
@@ -169,7 +218,8 @@ def main():
     c = json.loads((args.work / "compare" / "compare.json").read_text())
     args.img.mkdir(parents=True, exist_ok=True)
     figures(c, args.img)
-    text = "\n\n".join([acquisition_table(twin), scanner_lines(twin), metrics_table(c)])
+    text = "\n\n".join([acquisition_table(twin), scanner_lines(twin), metrics_table(c),
+                          variants(args)])
     (args.work / "figures.md").write_text(text + "\n")
     print(text)
 

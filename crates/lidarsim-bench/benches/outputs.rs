@@ -15,7 +15,7 @@ use std::path::Path;
 
 use lidarsim::Survey;
 use lidarsim::files::las_settings;
-use lidarsim::output::{LasSettings, LasWriter, PlyWriter, PointSink, XyzWriter};
+use lidarsim::output::{FileSink, LasSettings, LasWriter, PlyWriter, XyzWriter};
 use lidarsim::sim::Simulator;
 use lidarsim::world::World;
 use lidarsim_bench::TimedSink;
@@ -38,7 +38,7 @@ fn main() {
     ];
     for (format, files) in cases {
         let path = dir.join(files[0]);
-        let sink: Box<dyn PointSink> = match format {
+        let sink: Box<FileSink> = match format {
             "las" => Box::new(LasWriter::create(&path, base.clone()).unwrap()),
             "laz" => Box::new(
                 LasWriter::create(

@@ -7,14 +7,14 @@
 //! to a sink that only counts them, so the figures measure simulation, not
 //! disk; one extra case writes the demo's LAS file to measure output cost.
 
-use std::io;
+use std::convert::Infallible;
 use std::time::Instant;
 
-use lidarsim::Survey;
 use lidarsim::output::{PointRecord, PointSink};
-use lidarsim::run::{RunOptions, run_to_dir};
+use lidarsim::run::{RunOptions, run};
 use lidarsim::sim::Simulator;
 use lidarsim::world::World;
+use lidarsim::{Flight, Survey};
 
 const REPEATS: usize = 5;
 
@@ -22,11 +22,12 @@ const REPEATS: usize = 5;
 struct Count(u64);
 
 impl PointSink for Count {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    type Error = Infallible;
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), Infallible> {
         self.0 += points.len() as u64;
         Ok(())
     }
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), Infallible> {
         Ok(())
     }
     fn discard(self: Box<Self>) {}
@@ -146,7 +147,12 @@ fn main() {
     // Whole run with LAS + XYZ output, 2 threads.
     let dir = std::env::temp_dir().join(format!("lidarsim-bench-{}", std::process::id()));
     let t = Instant::now();
-    let s = run_to_dir(&demo, &dir, &RunOptions::new(2, &|_| {})).expect("demo run");
+    let s = run(
+        &Flight::build(demo).expect("demo world"),
+        &dir,
+        &RunOptions::new(2, &|_| {}),
+    )
+    .expect("demo run");
     println!(
         "demo_with_output threads=2 pulses_per_s={:.0} seconds={:.2}",
         s.pulses as f64 / t.elapsed().as_secs_f64(),

@@ -29,11 +29,11 @@ use std::io::{self, BufWriter, Write};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-use lidarsim::Survey;
-use lidarsim::files::las_settings;
-use lidarsim::output::{LasWriter, PointRecord, PointSink, WaveformBlock};
+use lidarsim::output::{
+    AtFile, FileSink, LasWriter, PointRecord, PointSink, WaveformBlock, WriteError,
+};
 use lidarsim::sim::Simulator;
-use lidarsim::world::World;
+use lidarsim::{Flight, Survey};
 
 /// A benchmark scene.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -302,9 +302,13 @@ seed = 3
 /// Writes a scene's OBJ files and survey (a line of `pulses` pulses) into
 /// `dir` as `NAME-ground.obj`, `NAME-buildings.obj` (not for the forest)
 /// and `NAME.toml`; returns the survey's path.
-pub fn export(scene: BenchScene, dir: &Path, pulses: u64) -> io::Result<std::path::PathBuf> {
+pub fn export(
+    scene: BenchScene,
+    dir: &Path,
+    pulses: u64,
+) -> Result<std::path::PathBuf, WriteError> {
     use lidarsim::output::own::{Mark, check_replaceable};
-    std::fs::create_dir_all(dir)?;
+    std::fs::create_dir_all(dir).at(dir)?;
     let name = scene.name();
     // Every file written begins "# lidarsim benchmark": the scenes of an
     // earlier export are replaced, nothing else.
@@ -313,20 +317,21 @@ pub fn export(scene: BenchScene, dir: &Path, pulses: u64) -> io::Result<std::pat
         format!("{name}-buildings.obj"),
         format!("{name}.toml"),
     ] {
-        check_replaceable(&dir.join(&file), Mark::FirstLine("# lidarsim benchmark"))
-            .map_err(|e| io::Error::new(e.kind(), format!("{file}: {e}")))?;
+        check_replaceable(&dir.join(&file), Mark::FirstLine("# lidarsim benchmark"))?;
     }
     let ground = format!("{name}-ground.obj");
-    write_ground_obj(scene, &dir.join(&ground))?;
+    let ground_path = dir.join(&ground);
+    write_ground_obj(scene, &ground_path).at(&ground_path)?;
     let text = if scene == BenchScene::Forest {
         forest_survey_toml(&ground, pulses)
     } else {
         let boxes = format!("{name}-buildings.obj");
-        write_boxes_obj(scene, &dir.join(&boxes))?;
+        let boxes_path = dir.join(&boxes);
+        write_boxes_obj(scene, &boxes_path).at(&boxes_path)?;
         survey_toml(&ground, &boxes, pulses)
     };
     let survey = dir.join(format!("{name}.toml"));
-    std::fs::write(&survey, text)?;
+    std::fs::write(&survey, text).at(&survey)?;
     Ok(survey)
 }
 
@@ -489,7 +494,7 @@ pub fn thread_cpu_seconds() -> Option<f64> {
 /// time (which includes waits for a core and for the disk) and CPU time of
 /// the calling thread, around every write and the finish.
 pub struct TimedSink {
-    inner: Box<dyn PointSink>,
+    inner: Box<FileSink>,
     spent: Duration,
     cpu_s: Option<f64>,
     points: u64,
@@ -509,7 +514,7 @@ pub struct WriteTime {
 
 impl TimedSink {
     /// Wraps `inner`.
-    pub fn new(inner: Box<dyn PointSink>) -> Self {
+    pub fn new(inner: Box<FileSink>) -> Self {
         Self {
             inner,
             spent: Duration::ZERO,
@@ -519,7 +524,7 @@ impl TimedSink {
     }
 
     /// Runs `f` on the wrapped sink, adding its wall-clock and CPU time.
-    fn timed<R>(&mut self, f: impl FnOnce(&mut Box<dyn PointSink>) -> R) -> R {
+    fn timed<R>(&mut self, f: impl FnOnce(&mut Box<FileSink>) -> R) -> R {
         let (t, c0) = (Instant::now(), thread_cpu_seconds());
         let r = f(&mut self.inner);
         let c1 = thread_cpu_seconds();
@@ -529,7 +534,7 @@ impl TimedSink {
     }
 
     /// Finishes the wrapped sink (timed too) and returns the times.
-    pub fn finish_timed(self) -> io::Result<WriteTime> {
+    pub fn finish_timed(self) -> Result<WriteTime, WriteError> {
         let Self {
             inner,
             mut spent,
@@ -549,15 +554,21 @@ impl TimedSink {
 }
 
 impl PointSink for TimedSink {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    type Error = WriteError;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteError> {
         self.points += points.len() as u64;
         self.timed(|s| s.write(points))
     }
-    fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
+    fn write_block(
+        &mut self,
+        points: &[PointRecord],
+        waveforms: &WaveformBlock,
+    ) -> Result<(), WriteError> {
         self.points += points.len() as u64;
         self.timed(|s| s.write_block(points, waveforms))
     }
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), WriteError> {
         self.finish_timed().map(|_| ())
     }
     fn discard(self: Box<Self>) {
@@ -592,21 +603,22 @@ pub fn measure(
     let survey = Survey::load(survey_path).map_err(|e| e.to_string())?;
     let parse_s = t0.elapsed().as_secs_f64();
     let t1 = Instant::now();
-    let world = World::build(&survey).map_err(|e| e.to_string())?;
+    let flight = Flight::build(survey).map_err(|e| e.to_string())?;
     let build_s = t1.elapsed().as_secs_f64();
+    let (survey, world) = (flight.survey(), flight.world());
     let primitives = world.scene().primitives.len();
-    let sim = Simulator::new(&survey, &world);
+    let sim = Simulator::new(survey, world);
     let subrays = survey.scanner.subrays as u64;
     let mut runs = Vec::new();
     for &n in threads {
         let path = work_dir.join(format!("{}-{n}.las", scene.name()));
-        let settings = las_settings(&survey, &world);
+        let settings = flight.las_settings();
         let cpu0 = process_cpu_seconds();
         let t = Instant::now();
         let las = LasWriter::create(&path, settings).map_err(|e| e.to_string())?;
         let mut las = TimedSink::new(Box::new(las));
         let counts = sim
-            .run(n, &mut [&mut las as &mut dyn PointSink], &|_| {})
+            .run(n, &mut [&mut las as &mut FileSink], &|_| {})
             .map_err(|e| e.to_string())?;
         let write = las.finish_timed().map_err(|e| e.to_string())?;
         let seconds = t.elapsed().as_secs_f64();
@@ -713,7 +725,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("lidarsim-bench-{}", std::process::id()));
         let survey = export(BenchScene::Flat, &dir, PULSES).unwrap();
         let s = Survey::load(&survey).unwrap();
-        let w = World::build(&s).unwrap();
+        let w = lidarsim::world::World::build(&s).unwrap();
         assert_eq!(w.scene().primitives.len(), 62);
         use lidarsim::scene::SurfaceClass;
         let count = |c| w.scene().primitives.iter().filter(|p| p.class == c).count();

@@ -1,8 +1,11 @@
 //! The command line as clap parses it: the commands and their options.
 
 use std::path::PathBuf;
+use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
+
+use crate::console::fail;
 
 /// The whole command line: one of the commands.
 #[derive(Parser)]
@@ -364,4 +367,13 @@ fn seconds_parser() -> impl clap::builder::TypedValueParser<Value = f64> {
             ))
         }
     })
+}
+
+/// `threads`, or every core; a zero is refused.
+pub fn threads_or_all(threads: Option<usize>) -> Result<usize, ExitCode> {
+    match threads {
+        Some(0) => Err(fail(2, "--threads must be at least 1")),
+        Some(n) => Ok(n),
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
 }

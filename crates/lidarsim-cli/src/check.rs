@@ -5,24 +5,22 @@
 use std::path::Path;
 use std::process::ExitCode;
 
-use lidarsim::Survey;
+use lidarsim::Flight;
 use lidarsim::message::fixed;
-use lidarsim::plan::plan;
-use lidarsim::world::{World, load};
 
 use crate::args::CheckArgs;
 use crate::console::{fail_survey, source_name, warn};
 
 /// `lidarsim check`: exit status 2 for a bad survey.
 pub fn command(args: CheckArgs) -> ExitCode {
-    match load(&args.survey, None) {
-        Ok((s, w)) => {
-            warn(&s, &w);
-            check(&s, &w, &args.output);
+    match Flight::load(&args.survey, None) {
+        Ok(flight) => {
+            warn(&flight);
+            check(&flight, &args.output);
             // The process ends here: its memory goes back whole, faster
             // than the world's millions of primitives are dropped one by
             // one (0.3 s for a stand of 1.5 M trees).
-            std::mem::forget(w);
+            std::mem::forget(flight);
             ExitCode::SUCCESS
         }
         Err(e) => fail_survey(&e),
@@ -31,14 +29,11 @@ pub fn command(args: CheckArgs) -> ExitCode {
 
 /// Prints the survey's plan and estimates, warning of shortfalls of disk
 /// or memory.
-fn check(survey: &Survey, world: &World, output: &Path) {
-    use lidarsim::budget::{available_memory, estimate, free_bytes, human_bytes};
-    let p = plan(survey, world);
-    for w in lidarsim::plan::warnings(survey, world, &p) {
-        note!("warning: {}: {w}", source_name(survey));
-    }
+fn check(flight: &Flight, output: &Path) {
+    use lidarsim::budget::{available_memory, free_bytes, human_bytes};
+    let (survey, world, p) = (flight.survey(), flight.world(), flight.plan());
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-    let b = estimate(survey, world, threads);
+    let b = flight.estimate(threads);
     let (free, memory) = (free_bytes(output), available_memory());
     for s in b.shortfalls(output, free, memory, 1.0) {
         note!(

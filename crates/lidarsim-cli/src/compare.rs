@@ -50,8 +50,8 @@ pub fn command(args: CompareArgs) -> ExitCode {
         say!("note: {n}");
     }
     if let Some(dir) = &args.output {
-        if let Err((path, e)) = write_comparison(&c, dir, args.overwrite) {
-            return fail(1, &format!("{}: {e}", path.display()));
+        if let Err(e) = write_comparison(&c, dir, args.overwrite) {
+            return fail(1, &e.to_string());
         }
         say!(
             "wrote {} and {}",

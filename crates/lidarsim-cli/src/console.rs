@@ -4,8 +4,7 @@
 
 use std::process::ExitCode;
 
-use lidarsim::Survey;
-use lidarsim::world::World;
+use lidarsim::{Error, Flight, Survey};
 
 /// Prints a line to standard error, ignoring a closed pipe (`2>&1 | head`).
 macro_rules! note {
@@ -51,11 +50,21 @@ pub fn source_name(survey: &Survey) -> String {
         .map_or_else(|| "<demo>".to_string(), |p| p.display().to_string())
 }
 
-/// Prints the survey's and its world's warnings to standard error.
-pub fn warn(survey: &Survey, world: &World) {
-    let file = source_name(survey);
-    for w in &world.warnings_with(survey) {
+/// Prints the flight's warnings (the survey's, its world's, its plan's)
+/// to standard error.
+pub fn warn(flight: &Flight) {
+    let file = source_name(flight.survey());
+    for w in flight.warnings() {
         note!("warning: {file}: {w}");
+    }
+}
+
+/// Reports a library error: a survey's problems with exit status 2
+/// ([`fail_survey`]), anything else with exit status 1.
+pub fn fail_with(e: &Error) -> ExitCode {
+    match e {
+        Error::Survey(s) => fail_survey(s),
+        _ => fail(1, &e.to_string()),
     }
 }
 

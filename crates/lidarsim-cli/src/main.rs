@@ -22,6 +22,7 @@ mod check;
 mod compare;
 mod cpu;
 mod parts;
+mod progress;
 mod render;
 mod simulate;
 mod summary;

@@ -6,36 +6,32 @@ use std::path::Path;
 use std::process::ExitCode;
 use std::time::Duration;
 
-use lidarsim::Survey;
+use lidarsim::Flight;
 use lidarsim::run::RunOptions;
 use lidarsim::run::merge::{Follow, Parts, merge as merge_parts, merge_following};
 use lidarsim::run::part::{part_ranges, run_part as simulate_part};
-use lidarsim::world::World;
 
 use crate::INTERRUPTED;
 use crate::STOP;
 use crate::args::MergeArgs;
-use crate::console::{fail, warn};
-use crate::simulate::{pulse_bar, threads_or_all};
+use crate::args::threads_or_all;
+use crate::console::{fail_with, warn};
+use crate::progress::pulse_bar;
 
 /// Simulates part `k` of `n` into `output`.
 pub fn run_part(
-    survey: &Survey,
-    world: &World,
+    flight: &Flight,
     output: &Path,
     threads: Option<usize>,
     (k, n): (usize, usize),
     overwrite: bool,
 ) -> ExitCode {
-    warn(survey, world);
+    warn(flight);
     let threads = match threads_or_all(threads) {
         Ok(t) => t,
         Err(code) => return code,
     };
-    let total: u64 = part_ranges(survey, world, k, n)
-        .iter()
-        .map(|r| r.len())
-        .sum();
+    let total: u64 = part_ranges(flight, k, n).iter().map(|r| r.len()).sum();
     let bar = pulse_bar(total);
     let progress = |done: u64| bar.set_position(done);
     let options = RunOptions {
@@ -43,7 +39,7 @@ pub fn run_part(
         overwrite,
         ..RunOptions::new(threads, &progress)
     };
-    let result = simulate_part(survey, world, (k, n), output, &options);
+    let result = simulate_part(flight, (k, n), output, &options);
     bar.finish_and_clear();
     match result {
         Ok(r) if !r.complete => {
@@ -65,7 +61,7 @@ pub fn run_part(
             note!("join the parts with: lidarsim merge PART_DIR... -o DIR");
             ExitCode::SUCCESS
         }
-        Err(e) => fail(1, &e.to_string()),
+        Err(e) => fail_with(&e),
     }
 }
 
@@ -114,6 +110,6 @@ pub fn merge(args: MergeArgs) -> ExitCode {
             crate::summary::print(&summary, &output);
             ExitCode::SUCCESS
         }
-        Err(e) => fail(1, &e.to_string()),
+        Err(e) => fail_with(&e),
     }
 }

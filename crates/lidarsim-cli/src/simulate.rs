@@ -2,19 +2,18 @@
 //! directory behind a progress bar. Ctrl-C stops a run with valid files
 //! (see `main`); `run --resume DIR` continues it.
 
-use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
-use std::sync::atomic::{AtomicBool, Ordering};
 
-use indicatif::{ProgressBar, ProgressStyle};
-use lidarsim::Survey;
-use lidarsim::run::{RunOptions, run_world_to_dir};
-use lidarsim::world::{World, load};
+use lidarsim::run::{RunOptions, run as run_flight};
+use lidarsim::{Flight, Survey};
 
+use crate::INTERRUPTED;
+use crate::STOP;
+use crate::args::threads_or_all;
 use crate::args::{DemoArgs, RunArgs};
-use crate::console::{fail, fail_survey, source_name, warn};
-use crate::{INTERRUPTED, STOP};
+use crate::console::{fail, fail_survey, fail_with, warn};
+use crate::progress::{hold_at_pulse, hold_until_stopped, pulse_bar};
 
 /// `lidarsim demo`: the built-in survey, optionally exported as TOML.
 pub fn demo(args: DemoArgs) -> ExitCode {
@@ -56,8 +55,8 @@ pub fn demo(args: DemoArgs) -> ExitCode {
             return fail(1, &list.join("\n"));
         }
     };
-    let world = match World::build(&survey) {
-        Ok(w) => w,
+    let flight = match Flight::build(survey) {
+        Ok(f) => f,
         Err(e) => return fail_survey(&e),
     };
     let how = How {
@@ -65,7 +64,7 @@ pub fn demo(args: DemoArgs) -> ExitCode {
         overwrite,
         no_space_check,
     };
-    simulate(&survey, &world, &output, threads, how)
+    simulate(&flight, &output, threads, how)
 }
 
 /// `lidarsim run`: a survey file, or the interrupted run of a directory.
@@ -95,48 +94,26 @@ pub fn run(args: RunArgs) -> ExitCode {
             ),
         );
     }
-    let (survey, world) = match load(&path, seed) {
-        Ok(loaded) => loaded,
+    let flight = match Flight::load(&path, seed) {
+        Ok(f) => f,
         Err(e) => return fail_survey(&e),
     };
     let code = match part {
-        Some(part) => crate::parts::run_part(&survey, &world, &output, threads, part, overwrite),
+        Some(part) => crate::parts::run_part(&flight, &output, threads, part, overwrite),
         None => {
             let how = How {
                 resume: resuming,
                 overwrite,
                 no_space_check,
             };
-            simulate(&survey, &world, &output, threads, how)
+            simulate(&flight, &output, threads, how)
         }
     };
     // The process ends here: its memory goes back whole, faster than the
     // world's millions of primitives are dropped one by one (0.3 s for a
     // stand of 1.5 M trees). Every file is written and closed by now.
-    std::mem::forget(world);
+    std::mem::forget(flight);
     code
-}
-
-/// Test hook: `LIDARSIM_TEST_HOLD_AT_PULSE=N` makes a run wait, once N
-/// pulses are written, until it is stopped (Ctrl-C or SIGTERM), after
-/// printing "holding after K pulses" to standard error: tests interrupt a
-/// run at a known point instead of after a guessed time.
-fn hold_at_pulse() -> Option<u64> {
-    std::env::var("LIDARSIM_TEST_HOLD_AT_PULSE")
-        .ok()?
-        .parse()
-        .ok()
-}
-
-/// Waits for the stop flag (see [`hold_at_pulse`]).
-fn hold_until_stopped(done: u64) {
-    static ANNOUNCED: AtomicBool = AtomicBool::new(false);
-    if !ANNOUNCED.swap(true, Ordering::SeqCst) {
-        note!("holding after {done} pulses");
-    }
-    while !STOP.load(Ordering::SeqCst) {
-        std::thread::sleep(std::time::Duration::from_millis(2));
-    }
 }
 
 /// How `simulate` treats the output directory and the machine's limits.
@@ -149,44 +126,15 @@ struct How {
     no_space_check: bool,
 }
 
-/// `threads`, or every core; a zero is refused.
-pub(crate) fn threads_or_all(threads: Option<usize>) -> Result<usize, ExitCode> {
-    match threads {
-        Some(0) => Err(fail(2, "--threads must be at least 1")),
-        Some(n) => Ok(n),
-        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
-    }
-}
-
-/// A progress bar of `total` pulses on a terminal, hidden otherwise.
-pub(crate) fn pulse_bar(total: u64) -> ProgressBar {
-    if !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
-    }
-    let b = ProgressBar::new(total);
-    if let Ok(style) = ProgressStyle::with_template(
-        "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} pulses ({per_sec}, eta {eta})",
-    ) {
-        b.set_style(style);
-    }
-    b
-}
-
-/// Runs the survey into `output` and says how it went.
-fn simulate(
-    survey: &Survey,
-    world: &World,
-    output: &Path,
-    threads: Option<usize>,
-    how: How,
-) -> ExitCode {
+/// Runs the flight into `output` and says how it went.
+fn simulate(flight: &Flight, output: &Path, threads: Option<usize>, how: How) -> ExitCode {
     let How {
         resume,
         overwrite,
         no_space_check,
     } = how;
-    warn(survey, world);
-    if survey.output.formats.laz && !resume {
+    warn(flight);
+    if flight.survey().output.formats.laz && !resume {
         note!(
             "note: this run writes LAZ, which cannot be continued: if it is stopped, run the \
              survey again"
@@ -196,8 +144,7 @@ fn simulate(
         Ok(n) => n,
         Err(code) => return code,
     };
-    let total: u64 = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
-    let bar = pulse_bar(total);
+    let bar = pulse_bar(flight.pulses());
     let hold = hold_at_pulse();
     let progress = |done: u64| {
         bar.set_position(done);
@@ -205,22 +152,15 @@ fn simulate(
             hold_until_stopped(done);
         }
     };
-    let name = source_name(survey);
-    let result = run_world_to_dir(
-        survey,
-        world,
+    let result = run_flight(
+        flight,
         output,
         &RunOptions {
-            threads,
-            progress: &progress,
             stop: Some(&STOP),
             resume,
             overwrite,
             no_space_check,
-            pulse_budget: None,
-            on_warning: Some(&|w: &str| {
-                bar.suspend(|| note!("warning: {name}: {w}"));
-            }),
+            ..RunOptions::new(threads, &progress)
         },
     );
     bar.finish_and_clear();
@@ -246,6 +186,6 @@ fn simulate(
             crate::summary::print(&summary, output);
             ExitCode::SUCCESS
         }
-        Err(e) => fail(1, &e.to_string()),
+        Err(e) => fail_with(&e),
     }
 }

@@ -223,7 +223,7 @@ fn waveform(
         ));
     }
     let sim = lidarsim::sim::Simulator::new(&survey, &world);
-    let (plot, scratch) = lidarsim::run::replay::pulse(&sim, line_ref, k);
+    let (plot, detail) = lidarsim::run::replay::pulse(&sim, line_ref, k);
     plot.render()
         .save_png(output)
         .map_err(|e| (1, format!("{}: {e}", output.display())))?;
@@ -231,10 +231,10 @@ fn waveform(
         "line {} pulse {k} (GPS time {} s): {} sub-ray returns, {} echo(es)",
         line_ref.index + 1,
         fixed(offset + sim.pulse_time(line_ref, k), 6),
-        scratch.returns().len(),
-        scratch.echoes().len()
+        detail.returns.len(),
+        detail.echoes.len()
     );
-    for (i, e) in scratch.echoes().iter().enumerate() {
+    for (i, e) in detail.echoes.iter().enumerate() {
         say!(
             "  echo {}: range {:.3} m, peak {:.4}, energy amplitude {:.4}, width {:.2} ns",
             i + 1,

@@ -5,6 +5,8 @@
 //! the documented API.
 
 mod convert;
+mod errors;
+mod hold;
 mod part_merge;
 mod points;
 mod real;
@@ -16,14 +18,6 @@ mod waveform;
 
 use pyo3::exceptions::PyImportError;
 use pyo3::prelude::*;
-
-pyo3::create_exception!(
-    _lidarsim,
-    SurveyError,
-    pyo3::exceptions::PyValueError,
-    "A survey with problems: `str(e)` lists every one with its key, \
-     `e.diagnostics` holds them as dicts (file, line, column, key, message, help)."
-);
 
 /// Merges the parts of a split run (directories of `run_part`) into
 /// `out_dir`: the files of the unsplit run; returns its summary. With
@@ -61,7 +55,7 @@ fn _lidarsim(m: &Bound<'_, PyModule>) -> PyResult<()> {
              ./crates/lidarsim-py"
         )));
     }
-    m.add("SurveyError", m.py().get_type::<SurveyError>())?;
+    errors::add_classes(m)?;
     m.add("VERSION", env!("CARGO_PKG_VERSION"))?;
     m.add("POINT_FIELDS", points::FIELDS.to_vec())?;
     m.add("POINT_RECORD_BYTES", points::RECORD_BYTES)?;

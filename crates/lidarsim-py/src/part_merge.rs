@@ -5,11 +5,12 @@
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
+use lidarsim::Flight;
 use lidarsim::run::merge::{Merge, Parts, merge_over};
-use lidarsim::{Survey, World};
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
+use crate::errors::to_py;
 use crate::run::{DirOptions, check_threads, watched};
 use crate::survey::SurveyCore;
 
@@ -18,9 +19,9 @@ fn taken(take_parts: bool) -> Parts {
     if take_parts { Parts::Take } else { Parts::Keep }
 }
 
-/// The survey of `core` with its world, if the world is built already.
-fn built(core: Option<&SurveyCore>) -> Option<(Arc<Survey>, Arc<World>)> {
-    core.and_then(|c| Some((Arc::clone(&c.survey), c.built_world()?)))
+/// The flight of `core`, if its world is built already.
+fn built(core: Option<&SurveyCore>) -> Option<Arc<Flight>> {
+    core.and_then(SurveyCore::built_flight)
 }
 
 /// Merges the parts in `part_dirs` into `out_dir` and returns the summary;
@@ -41,8 +42,13 @@ pub fn merge<'py>(
     };
     let built = built(survey);
     watched(py, (threads, None, 0), &o, |options| {
-        let built = built.as_ref().map(|(s, w)| (&**s, &**w));
-        merge_over(&part_dirs, out_dir, options, taken(take_parts), built)
+        merge_over(
+            &part_dirs,
+            out_dir,
+            options,
+            taken(take_parts),
+            built.as_deref(),
+        )
     })
 }
 
@@ -61,7 +67,7 @@ impl PartMerge {
     fn new(py: Python<'_>, out_dir: PathBuf, overwrite: bool, take_parts: bool) -> PyResult<Self> {
         let merge = py
             .detach(|| Merge::begin(&out_dir, overwrite, taken(take_parts)))
-            .map_err(|e| PyOSError::new_err(e.to_string()))?;
+            .map_err(|e| to_py(py, &e, false))?;
         Ok(Self {
             merge: Mutex::new(Some(merge)),
         })
@@ -80,7 +86,7 @@ impl PartMerge {
         })
         .map_err(|e| match e {
             Added::Finished => finished(),
-            Added::Refused(e) => PyOSError::new_err(e.to_string()),
+            Added::Refused(e) => to_py(py, &e, false),
         })
     }
 
@@ -99,8 +105,7 @@ impl PartMerge {
             .ok_or_else(finished)?;
         let built = built(survey.as_deref());
         watched(py, (threads, None, 0), &DirOptions::default(), |options| {
-            let built = built.as_ref().map(|(s, w)| (&**s, &**w));
-            merge.finish(options, built)
+            merge.finish(options, built.as_deref())
         })
     }
 }
@@ -110,7 +115,7 @@ enum Added {
     /// The merge is finished.
     Finished,
     /// The merge refused it.
-    Refused(lidarsim::run::RunError),
+    Refused(lidarsim::Error),
 }
 
 /// The error of a merge used after `finish`.

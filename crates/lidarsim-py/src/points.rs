@@ -4,10 +4,10 @@
 //! angle in the LAS field's 0.006° units, extra bytes as `f32` — using the
 //! library's own encoders, so an array and the file agree to the bit.
 
-use std::io;
-
 use lidarsim::files::TrajectoryRow;
-use lidarsim::output::{LasSettings, PointRecord, PointSink, return_numbers, scan_angle_units};
+use lidarsim::output::{
+    LasSettings, PointRecord, PointSink, WriteCause, return_numbers, scan_angle_units,
+};
 
 /// The fields of a point, in order: (name, NumPy type). Names are laspy's
 /// dimension names where it has one, else the LAS file's extra-byte names;
@@ -54,7 +54,7 @@ pub const TRAJECTORY_FIELDS: [(&str, &str); 8] = [
 ];
 
 /// Appends the packed bytes of `p` to `out`.
-pub fn pack(settings: &LasSettings, p: &PointRecord, out: &mut Vec<u8>) -> io::Result<()> {
+pub fn pack(settings: &LasSettings, p: &PointRecord, out: &mut Vec<u8>) -> Result<(), WriteCause> {
     let q = settings.quantize_point(p.position_m)?;
     for (a, qa) in q.iter().enumerate() {
         let v = f64::from(*qa) * settings.scale_m + settings.offset_m[a];
@@ -69,7 +69,7 @@ pub fn pack(settings: &LasSettings, p: &PointRecord, out: &mut Vec<u8>) -> io::R
         u8::from(p.edge_of_flight_line),
         p.channel & 3,
         p.classification,
-        p.component,
+        p.component.code(),
     ]);
     out.extend_from_slice(&scan_angle_units(p.scan_angle_deg).to_le_bytes());
     out.extend_from_slice(&p.point_source_id.to_le_bytes());
@@ -82,7 +82,7 @@ pub fn pack(settings: &LasSettings, p: &PointRecord, out: &mut Vec<u8>) -> io::R
     ] {
         out.extend_from_slice(&(v as f32).to_le_bytes());
     }
-    out.extend_from_slice(&p.object_id.to_le_bytes());
+    out.extend_from_slice(&p.object_code().to_le_bytes());
     for e in [p.error_m.x, p.error_m.y, p.error_m.z] {
         out.extend_from_slice(&(e as f32).to_le_bytes());
     }
@@ -112,7 +112,10 @@ pub struct PackSink {
 }
 
 impl PointSink for PackSink {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    /// A point the LAS scale and offset cannot store.
+    type Error = WriteCause;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteCause> {
         self.bytes.reserve(points.len() * RECORD_BYTES);
         for p in points {
             pack(&self.settings, p, &mut self.bytes)?;
@@ -120,7 +123,7 @@ impl PointSink for PackSink {
         Ok(())
     }
 
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), WriteCause> {
         Ok(())
     }
 

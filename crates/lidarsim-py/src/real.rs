@@ -12,18 +12,21 @@ use lidarsim::twin::acquisition::AcquisitionSettings;
 use lidarsim::twin::trees::{TreeSettings, Window};
 use lidarsim::twin::{TwinError, TwinOptions, twin as make_twin, write::write_twin};
 use numpy::PyReadonlyArray1;
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use crate::convert::json_to_py;
+use crate::errors::{InputError, write_error};
 
-/// A twin error as the Python exception of its kind: files are
-/// `OSError`s, everything else (options, a scan that cannot be twinned)
-/// `ValueError`s.
+/// A twin error as the Python exception of its kind: the scan that
+/// cannot be read an `InputError`, a file that cannot be written an
+/// `OutputError` (both `OSError`s), everything else (options, a scan that
+/// cannot be twinned) a `ValueError`.
 fn twin_error(e: TwinError) -> PyErr {
     match e {
-        TwinError::Scan(_) | TwinError::Write { .. } => PyOSError::new_err(e.to_string()),
+        TwinError::Scan(_) => InputError::new_err(e.to_string()),
+        TwinError::Write(w) => write_error(&w),
         _ => PyValueError::new_err(e.to_string()),
     }
 }
@@ -86,8 +89,9 @@ pub fn twin<'py>(
         Ok::<_, TwinError>((survey, twin.summary_lines()))
     });
     let (survey, summary) = made.map_err(twin_error)?;
-    let report = std::fs::read_to_string(out_dir.join("twin.json"))
-        .map_err(|e| PyOSError::new_err(format!("{}: {e}", out_dir.join("twin.json").display())))?;
+    let report = std::fs::read_to_string(out_dir.join("twin.json")).map_err(|e| {
+        InputError::new_err(format!("{}: {e}", out_dir.join("twin.json").display()))
+    })?;
     let out = PyDict::new(py);
     out.set_item("survey", survey)?;
     out.set_item("summary", PyList::new(py, summary)?)?;
@@ -193,14 +197,13 @@ pub fn compare<'py>(
         let read = |c: Result<ScanCloud, PathBuf>| match c {
             Ok(c) => Ok(c),
             Err(p) => read_scan(&p, &lidarsim::scan::no_progress)
-                .map_err(|e| PyOSError::new_err(e.to_string())),
+                .map_err(|e| InputError::new_err(e.to_string())),
         };
         let (a, b) = (read(a)?, read(b)?);
         let c =
             compare_clouds(&a, &b, &options).map_err(|e| PyValueError::new_err(e.to_string()))?;
         if let Some(dir) = &out_dir {
-            write_comparison(&c, dir, overwrite)
-                .map_err(|(p, e)| PyOSError::new_err(format!("{}: {e}", p.display())))?;
+            write_comparison(&c, dir, overwrite).map_err(|e| write_error(&e))?;
         }
         let json = serde_json::to_string(&c).map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok::<_, PyErr>((json, table::text(&c)))

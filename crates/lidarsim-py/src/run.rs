@@ -2,24 +2,25 @@
 //! progress callback served between blocks of pulses on the calling thread
 //! (the thread that hands blocks to the sinks), points packed for NumPy.
 
-use std::io;
 use std::path::Path;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use lidarsim::output::PointSink;
-use lidarsim::run::{RunOptions, run_world_to_dir};
+use lidarsim::output::{PointSink, WriteCause};
+use lidarsim::run::RunOptions;
 use lidarsim::sim::{RunControl, Simulator};
 use lidarsim::summary::{Measured, Summary};
+use lidarsim::{Error, Flight};
 use numpy::PyArray1;
-use pyo3::exceptions::{PyOSError, PyValueError};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::json_to_py;
+use crate::errors::{point_error, to_py};
+use crate::hold::Hold;
 use crate::points::{PackSink, pack_trajectory};
-use crate::survey::SurveyCore;
 
 /// How often the progress callback is called at most.
 const PROGRESS_EVERY: Duration = Duration::from_millis(100);
@@ -41,6 +42,8 @@ struct Watch {
     /// Whether the run was called from Python's main thread, the only one
     /// that sees signals (a Dask worker runs tasks on other threads).
     main_thread: bool,
+    /// A test's hold of the run at a set pulse ([`Hold`]).
+    hold: Option<Hold>,
 }
 
 impl Watch {
@@ -60,6 +63,7 @@ impl Watch {
             last: Mutex::new(None),
             last_look: Mutex::new(None),
             main_thread,
+            hold: Hold::from_env(),
         }
     }
 
@@ -71,12 +75,29 @@ impl Watch {
     /// Called with the pulses simulated so far, after blocks were handed
     /// over, on the thread that called the run.
     fn tick(&self, done: u64) {
+        self.look(done);
+        if let Some(hold) = &self.hold {
+            let held = hold.wait(
+                done,
+                || self.stop.load(Ordering::SeqCst),
+                || self.look_at_signals(),
+            );
+            if let Err(e) = held {
+                self.fail(PyRuntimeError::new_err(e.to_string()));
+            }
+        }
+    }
+
+    /// The progress callback and Python's signals, at most as often as
+    /// [`LOOK_EVERY`] and [`PROGRESS_EVERY`] say (a hold is a new look).
+    fn look(&self, done: u64) {
         if self.stop.load(Ordering::SeqCst) || (!self.main_thread && self.progress.is_none()) {
             return;
         }
+        let holding = self.hold.as_ref().is_some_and(|h| h.due(done));
         {
             let mut last = self.last_look.lock().expect("look lock");
-            if last.is_some_and(|t| t.elapsed() < LOOK_EVERY) && done < self.total {
+            if last.is_some_and(|t| t.elapsed() < LOOK_EVERY) && done < self.total && !holding {
                 return;
             }
             *last = Some(Instant::now());
@@ -90,7 +111,7 @@ impl Watch {
                 return;
             };
             let mut last = self.last.lock().expect("progress lock");
-            if last.is_some_and(|t| t.elapsed() < PROGRESS_EVERY) && done < self.total {
+            if last.is_some_and(|t| t.elapsed() < PROGRESS_EVERY) && done < self.total && !holding {
                 return;
             }
             *last = Some(Instant::now());
@@ -98,6 +119,18 @@ impl Watch {
                 self.fail(e);
             }
         });
+    }
+
+    /// Python's signals (Ctrl-C), on the main thread: the first stops the
+    /// run.
+    fn look_at_signals(&self) {
+        if self.main_thread && !self.stop.load(Ordering::SeqCst) {
+            Python::attach(|py| {
+                if let Err(e) = py.check_signals() {
+                    self.fail(e);
+                }
+            });
+        }
     }
 
     fn take_error(&self) -> Option<PyErr> {
@@ -118,60 +151,51 @@ fn bytes_array(py: Python<'_>, bytes: Vec<u8>) -> Bound<'_, PyArray1<u8>> {
     PyArray1::from_vec(py, bytes)
 }
 
-/// Simulates the whole survey into memory. Returns a dict: `points` and
+/// Simulates the whole flight into memory. Returns a dict: `points` and
 /// `trajectory_true` / `trajectory_observed` as `uint8` arrays of packed
 /// records, `summary` (as in `summary.json`) and `las` (the LAS file's
 /// scale, offset, CRS and extra-byte groups).
 pub fn run<'py>(
     py: Python<'py>,
-    core: &SurveyCore,
+    flight: &Flight,
     threads: usize,
     progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
     check_threads(threads)?;
-    let world = core.world(py)?;
-    let survey = &*core.survey;
-    let total = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
-    let watch = Watch::new(progress, total);
-    let settings = lidarsim::files::las_settings(survey, &world);
+    let watch = Watch::new(progress, flight.pulses());
+    let settings = flight.las_settings();
     let result = py.detach(|| {
-        let sim = Simulator::new(survey, &world);
+        let sim = Simulator::new(flight.survey(), flight.world());
         let mut sink = PackSink {
             settings: settings.clone(),
             bytes: Vec::new(),
         };
         let started = Instant::now();
         let control = RunControl {
-            start: Default::default(),
             stop: Some(&watch.stop),
-            pulse_budget: None,
-            only: None,
+            ..RunControl::default()
         };
         let outcome = {
-            let mut sinks: [&mut (dyn PointSink + 'static); 1] = [&mut sink];
+            let mut sinks: [&mut (dyn PointSink<Error = WriteCause> + 'static); 1] = [&mut sink];
             sim.run_from(threads, &mut sinks, &|n| watch.tick(n), &control)?
         };
-        Ok::<_, io::Error>((sink.bytes, outcome, started.elapsed().as_secs_f64()))
+        Ok::<_, WriteCause>((sink.bytes, outcome, started.elapsed().as_secs_f64()))
     });
     if let Some(e) = watch.take_error() {
         return Err(e);
     }
-    let (bytes, outcome, wall_time_s) = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
-    let plan = lidarsim::plan::plan(survey, &world);
-    let warnings = lidarsim::plan::warnings(survey, &world, &plan);
+    let (bytes, outcome, wall_time_s) = result.map_err(|e| point_error(&e))?;
     let measured = Measured {
         counts: outcome.counts,
         threads,
         wall_time_s,
-        index_time_s: world.index_time_s,
-        scene_primitives: world.scene().primitives.len(),
-        estimate: lidarsim::budget::estimate(survey, &world, threads),
+        estimate: flight.estimate(threads),
     };
-    let summary = Summary::of(survey, &world, plan, &measured, Vec::new(), &warnings);
+    let summary = Summary::of(flight, &measured, Vec::new());
     let out = PyDict::new(py);
     out.set_item("points", bytes_array(py, bytes))?;
     for (name, observed) in [("trajectory_true", false), ("trajectory_observed", true)] {
-        let rows = lidarsim::files::trajectory_rows(survey, &world.lines, observed);
+        let rows = lidarsim::files::trajectory_rows(flight.survey(), flight.lines(), observed);
         out.set_item(name, bytes_array(py, pack_trajectory(&rows)))?;
     }
     let text = serde_json::to_string(&summary)
@@ -198,17 +222,17 @@ pub struct DirOptions {
 /// Runs `job` with the GIL released under a [`Watch`] of `progress` over
 /// `total` pulses, handing it the run options of `threads` and `o`, and
 /// returns what it returns as Python data (a dict, as its JSON). An error
-/// of the watch (Ctrl-C, the callback's) comes first; the job's is an
-/// `OSError`. Callers check `threads` before loading the world.
-pub(crate) fn watched<'py, T, E>(
+/// of the watch (Ctrl-C, the callback's) comes first; the job's is raised
+/// as the exception of its kind ([`to_py`]). Callers check `threads`
+/// before building the flight.
+pub(crate) fn watched<'py, T>(
     py: Python<'py>,
     (threads, progress, total): (usize, Option<Py<PyAny>>, u64),
     o: &DirOptions,
-    job: impl FnOnce(&RunOptions) -> Result<T, E> + Send,
+    job: impl FnOnce(&RunOptions) -> Result<T, Error> + Send,
 ) -> PyResult<Bound<'py, PyAny>>
 where
     T: serde::Serialize + Send,
-    E: std::fmt::Display + Send,
 {
     let watch = Watch::new(progress, total);
     let result = py.detach(|| {
@@ -225,7 +249,7 @@ where
     if let Some(e) = watch.take_error() {
         return Err(e);
     }
-    let value = result.map_err(|e| PyOSError::new_err(e.to_string()))?;
+    let value = result.map_err(|e| to_py(py, &e, false))?;
     let text = serde_json::to_string(&value)
         .map_err(|e| PyValueError::new_err(format!("cannot write the result: {e}")))?;
     json_to_py(py, &text)
@@ -237,26 +261,23 @@ where
 /// `KeyboardInterrupt`.
 pub fn run_to<'py>(
     py: Python<'py>,
-    core: &SurveyCore,
+    flight: &Flight,
     out_dir: &Path,
     threads: usize,
     progress: Option<Py<PyAny>>,
     o: DirOptions,
 ) -> PyResult<Bound<'py, PyAny>> {
     check_threads(threads)?;
-    let world = core.world(py)?;
-    let survey = &*core.survey;
-    let total = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
-    watched(py, (threads, progress, total), &o, |options| {
-        run_world_to_dir(survey, &world, out_dir, options)
+    watched(py, (threads, progress, flight.pulses()), &o, |options| {
+        lidarsim::run::run(flight, out_dir, options)
     })
 }
 
-/// Simulates part `k` of `n` of the survey into `out_dir` (its points,
+/// Simulates part `k` of `n` of the flight into `out_dir` (its points,
 /// part.json, survey.toml) and returns its record as a dict.
 pub fn run_part<'py>(
     py: Python<'py>,
-    core: &SurveyCore,
+    flight: &Flight,
     out_dir: &Path,
     (k, n): (usize, usize),
     threads: usize,
@@ -268,13 +289,11 @@ pub fn run_part<'py>(
             "part {k}/{n}: K must be from 1 to N, and N at least 1"
         )));
     }
-    let world = core.world(py)?;
-    let survey = &*core.survey;
     let o = DirOptions {
         overwrite,
         ..DirOptions::default()
     };
     watched(py, (threads, None, 0), &o, |options| {
-        lidarsim::run::part::run_part(survey, &world, (k, n), out_dir, options)
+        lidarsim::run::part::run_part(flight, (k, n), out_dir, options)
     })
 }

@@ -11,7 +11,7 @@ use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use crate::SurveyError;
+use crate::errors::SurveyError;
 use crate::survey::SurveyCore;
 
 /// `SurveyError` for `table[index]`'s argument at fault.

@@ -4,20 +4,21 @@
 //! waits while the queue is full and its workers stay at most a few blocks
 //! ahead of it, so nothing piles up when Python is slow to take them.
 
-use std::io;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, sync_channel};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use lidarsim::output::{LasSettings, PointRecord, PointSink};
+use lidarsim::Flight;
+use lidarsim::output::{LasSettings, PointRecord, PointSink, WriteCause};
 use lidarsim::sim::{RunControl, Simulator};
-use lidarsim::{Survey, World};
 use numpy::PyArray1;
-use pyo3::exceptions::{PyOSError, PyStopIteration};
+use pyo3::exceptions::{PyRuntimeError, PyStopIteration};
 use pyo3::prelude::*;
 
+use crate::errors::point_error;
+use crate::hold::Hold;
 use crate::points::{RECORD_BYTES, pack};
 
 /// Blocks waiting in the queue at most.
@@ -35,20 +36,28 @@ struct QueueSink {
     tx: SyncSender<Vec<u8>>,
 }
 
+/// Why a stream's simulation ended early.
+#[derive(Debug)]
+enum StreamEnd {
+    /// The stream was closed (the receiver is gone): stop quietly.
+    Closed,
+    /// A point the LAS scale and offset cannot store.
+    Point(WriteCause),
+}
+
 impl QueueSink {
-    fn send(&mut self) -> io::Result<()> {
+    fn send(&mut self) -> Result<(), StreamEnd> {
         let block = std::mem::take(&mut self.bytes);
-        // The receiver gone means the stream was closed: stop quietly.
-        self.tx
-            .send(block)
-            .map_err(|_| io::Error::new(io::ErrorKind::BrokenPipe, "the stream was closed"))
+        self.tx.send(block).map_err(|_| StreamEnd::Closed)
     }
 }
 
 impl PointSink for QueueSink {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    type Error = StreamEnd;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), StreamEnd> {
         for p in points {
-            pack(&self.settings, p, &mut self.bytes)?;
+            pack(&self.settings, p, &mut self.bytes).map_err(StreamEnd::Point)?;
         }
         if self.bytes.len() >= self.min_points * RECORD_BYTES {
             self.send()?;
@@ -56,7 +65,7 @@ impl PointSink for QueueSink {
         Ok(())
     }
 
-    fn finish(mut self: Box<Self>) -> io::Result<()> {
+    fn finish(mut self: Box<Self>) -> Result<(), StreamEnd> {
         if !self.bytes.is_empty() {
             self.send()?;
         }
@@ -74,27 +83,22 @@ pub struct PointStream {
     rx: Mutex<Option<Receiver<Vec<u8>>>>,
     stop: Arc<AtomicBool>,
     done: Arc<AtomicU64>,
-    worker: Mutex<Option<JoinHandle<io::Result<()>>>>,
+    worker: Mutex<Option<JoinHandle<Result<(), StreamEnd>>>>,
     total: u64,
 }
 
 impl PointStream {
-    /// Starts simulating `survey` over `world` on `threads` threads,
-    /// blocks of at least `min_points` points.
-    pub fn start(
-        survey: Arc<Survey>,
-        world: Arc<World>,
-        threads: usize,
-        min_points: usize,
-    ) -> Self {
+    /// Starts simulating `flight` on `threads` threads, blocks of at
+    /// least `min_points` points.
+    pub fn start(flight: Arc<Flight>, threads: usize, min_points: usize) -> Self {
         let (tx, rx) = sync_channel(QUEUE);
         let stop = Arc::new(AtomicBool::new(false));
         let done = Arc::new(AtomicU64::new(0));
-        let total = world.lines.iter().map(|l| survey.pulses_of(l)).sum();
-        let settings = lidarsim::files::las_settings(&survey, &world);
+        let total = flight.pulses();
+        let settings = flight.las_settings();
         let (stop_flag, counter) = (Arc::clone(&stop), Arc::clone(&done));
         let worker = std::thread::spawn(move || {
-            let sim = Simulator::new(&survey, &world);
+            let sim = Simulator::new(flight.survey(), flight.world());
             let mut sink = Box::new(QueueSink {
                 settings,
                 min_points: min_points.max(1),
@@ -107,9 +111,22 @@ impl PointStream {
                 pulse_budget: None,
                 only: None,
             };
-            let progress = |n: u64| counter.store(n, Ordering::SeqCst);
+            let hold = Hold::from_env();
+            let progress = |n: u64| {
+                counter.store(n, Ordering::SeqCst);
+                let held = hold.as_ref().map_or(Ok(()), |h| {
+                    h.wait(n, || stop_flag.load(Ordering::SeqCst), || {})
+                });
+                if let Err(e) = held {
+                    // The stream ends early: a test that meant to stop it
+                    // sees it end instead, and fails.
+                    eprintln!("{e}");
+                    stop_flag.store(true, Ordering::SeqCst);
+                }
+            };
             {
-                let mut sinks: [&mut (dyn PointSink + 'static); 1] = [sink.as_mut()];
+                let mut sinks: [&mut (dyn PointSink<Error = StreamEnd> + 'static); 1] =
+                    [sink.as_mut()];
                 sim.run_from(threads, &mut sinks, &progress, &control)?;
             }
             sink.finish()
@@ -134,9 +151,9 @@ impl PointStream {
         };
         match py.detach(|| worker.join()) {
             Ok(Ok(())) => Ok(()),
-            Ok(Err(e)) if e.kind() == io::ErrorKind::BrokenPipe => Ok(()),
-            Ok(Err(e)) => Err(PyOSError::new_err(e.to_string())),
-            Err(_) => Err(PyOSError::new_err("the simulation thread panicked")),
+            Ok(Err(StreamEnd::Closed)) => Ok(()),
+            Ok(Err(StreamEnd::Point(e))) => Err(point_error(&e)),
+            Err(_) => Err(PyRuntimeError::new_err("the simulation thread panicked")),
         }
     }
 }

@@ -1,63 +1,32 @@
-//! `SurveyCore`: a checked survey and, once built, its world.
+//! `SurveyCore`: a checked survey and, once built, its flight (the world
+//! and what follows from it).
 
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-use lidarsim::{Survey, World};
+use lidarsim::{Flight, Survey};
 use numpy::{PyReadonlyArray1, PyReadonlyArray2};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::PyDict;
 
-use crate::SurveyError;
 use crate::convert::{from_toml, to_toml};
+use crate::errors::survey_error;
 
 /// A checked survey (the `lidarsim.Survey` wrapper holds one).
 #[pyclass(module = "lidarsim._lidarsim", frozen)]
 pub struct SurveyCore {
     pub(crate) survey: Arc<Survey>,
-    world: Mutex<Option<Arc<World>>>,
+    flight: Mutex<Option<Arc<Flight>>>,
     /// Whether its text was made from a dict (its lines then mean nothing
     /// to the user, and errors show keys only).
     from_dict: bool,
-}
-
-/// The library's survey error as `SurveyError`: the message lists every
-/// problem; `diagnostics` holds them as dicts. `keys_only` leaves out the
-/// file, line and source text (for surveys given as dicts).
-pub fn survey_error(py: Python<'_>, e: &lidarsim::survey::SurveyError, keys_only: bool) -> PyErr {
-    let message = if keys_only {
-        e.diagnostics
-            .iter()
-            .map(|d| match &d.help {
-                Some(h) => format!("key `{}`: {} (help: {h})", d.key, d.message),
-                None => format!("key `{}`: {}", d.key, d.message),
-            })
-            .collect::<Vec<_>>()
-            .join("\n")
-    } else {
-        e.to_string()
-    };
-    let err = SurveyError::new_err(message);
-    let list = PyList::empty(py);
-    for d in &e.diagnostics {
-        let item = PyDict::new(py);
-        let _ = item.set_item("file", (!keys_only).then_some(&d.file));
-        let _ = item.set_item("line", (!keys_only && d.line > 0).then_some(d.line));
-        let _ = item.set_item("column", (!keys_only && d.column > 0).then_some(d.column));
-        let _ = item.set_item("key", &d.key);
-        let _ = item.set_item("message", &d.message);
-        let _ = item.set_item("help", d.help.as_deref());
-        let _ = list.append(item);
-    }
-    let _ = err.value(py).setattr("diagnostics", list);
-    err
 }
 
 impl SurveyCore {
     fn new(survey: Survey, from_dict: bool) -> Self {
         Self {
             survey: Arc::new(survey),
-            world: Mutex::new(None),
+            flight: Mutex::new(None),
             from_dict,
         }
     }
@@ -68,21 +37,22 @@ impl SurveyCore {
         Self::new(survey, self.from_dict)
     }
 
-    /// The survey's world, built (with the GIL released) on first use.
-    pub(crate) fn world(&self, py: Python<'_>) -> PyResult<Arc<World>> {
-        if let Some(w) = self.world.lock().expect("world lock").as_ref() {
-            return Ok(Arc::clone(w));
+    /// The survey's flight, its world built (with the GIL released) on
+    /// first use.
+    pub(crate) fn flight(&self, py: Python<'_>) -> PyResult<Arc<Flight>> {
+        if let Some(f) = self.flight.lock().expect("flight lock").as_ref() {
+            return Ok(Arc::clone(f));
         }
         let survey = Arc::clone(&self.survey);
-        let built = py.detach(move || World::build(&survey));
-        let world = Arc::new(built.map_err(|e| survey_error(py, &e, self.from_dict))?);
-        *self.world.lock().expect("world lock") = Some(Arc::clone(&world));
-        Ok(world)
+        let built = py.detach(move || Flight::build(survey));
+        let flight = Arc::new(built.map_err(|e| survey_error(py, &e, self.from_dict))?);
+        *self.flight.lock().expect("flight lock") = Some(Arc::clone(&flight));
+        Ok(flight)
     }
 
-    /// The survey's world if it is built already.
-    pub(crate) fn built_world(&self) -> Option<Arc<World>> {
-        self.world.lock().expect("world lock").clone()
+    /// The survey's flight if its world is built already.
+    pub(crate) fn built_flight(&self) -> Option<Arc<Flight>> {
+        self.flight.lock().expect("flight lock").clone()
     }
 
     fn from_text(
@@ -183,16 +153,12 @@ impl SurveyCore {
     /// Warnings about the settings (each names its key), and, once the
     /// world is built, about the settings over the scene.
     fn warnings(&self, py: Python<'_>) -> PyResult<Vec<String>> {
-        let world = self.world(py)?;
-        let plan = lidarsim::plan::plan(&self.survey, &world);
-        let mut all = world.warnings_with(&self.survey);
-        all.extend(lidarsim::plan::warnings(&self.survey, &world, &plan));
-        Ok(all)
+        Ok(self.flight(py)?.warnings().to_vec())
     }
 
     /// Builds the scene and index now (otherwise the first run does).
     fn build(&self, py: Python<'_>) -> PyResult<()> {
-        self.world(py).map(|_| ())
+        self.flight(py).map(|_| ())
     }
 
     /// The run: see `run.rs`.
@@ -203,7 +169,7 @@ impl SurveyCore {
         threads: usize,
         progress: Option<Py<PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        crate::run::run(py, self, threads, progress)
+        crate::run::run(py, &*self.flight(py)?, threads, progress)
     }
 
     /// A new survey with a mesh from arrays: see `scene_data.rs`.
@@ -272,7 +238,9 @@ impl SurveyCore {
         threads: usize,
         overwrite: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        crate::run::run_part(py, self, &out_dir, (k, n), threads, overwrite)
+        crate::run::check_threads(threads)?;
+        let flight = self.flight(py)?;
+        crate::run::run_part(py, &flight, &out_dir, (k, n), threads, overwrite)
     }
 
     /// A streamed run: see `stream.rs`.
@@ -284,12 +252,9 @@ impl SurveyCore {
         min_points: usize,
     ) -> PyResult<crate::stream::PointStream> {
         crate::run::check_threads(threads)?;
-        let world = self.world(py)?;
+        let flight = self.flight(py)?;
         Ok(crate::stream::PointStream::start(
-            Arc::clone(&self.survey),
-            world,
-            threads,
-            min_points,
+            flight, threads, min_points,
         ))
     }
 
@@ -300,7 +265,7 @@ impl SurveyCore {
         line: usize,
         pulse: u64,
     ) -> PyResult<Bound<'py, PyAny>> {
-        crate::waveform::waveform(py, self, line, pulse)
+        crate::waveform::waveform(py, &*self.flight(py)?, line, pulse)
     }
 
     /// A run into a directory: see `run.rs`.
@@ -316,9 +281,11 @@ impl SurveyCore {
         resume: bool,
         no_space_check: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
+        crate::run::check_threads(threads)?;
+        let flight = self.flight(py)?;
         crate::run::run_to(
             py,
-            self,
+            &flight,
             &out_dir,
             threads,
             progress,

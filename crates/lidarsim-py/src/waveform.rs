@@ -4,15 +4,16 @@
 //! Every random number of a pulse is keyed by the pulse, so this is the
 //! pulse of a run.
 
-use lidarsim::sim::{Scratch, Simulator};
+use lidarsim::Flight;
+use lidarsim::sim::Simulator;
 use lidarsim::waveform::bin_to_range;
 use numpy::PyArray1;
-use pyo3::exceptions::{PyIndexError, PyOSError};
+use pyo3::exceptions::PyIndexError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::errors::point_error;
 use crate::points::pack;
-use crate::survey::SurveyCore;
 
 fn array<'py>(py: Python<'py>, values: Vec<f64>) -> Bound<'py, PyArray1<f64>> {
     PyArray1::from_vec(py, values)
@@ -26,37 +27,32 @@ fn array<'py>(py: Python<'py>, values: Vec<f64>) -> Bound<'py, PyArray1<f64>> {
 /// `emitted` (false for a polygon's silent pulse slot).
 pub fn waveform<'py>(
     py: Python<'py>,
-    core: &SurveyCore,
+    flight: &Flight,
     line: usize,
     pulse: u64,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let world = core.world(py)?;
-    let survey = &*core.survey;
-    let Some(flight_line) = world.lines.get(line) else {
+    let Some(flight_line) = flight.lines().get(line) else {
         return Err(PyIndexError::new_err(format!(
             "line {line}: the survey has {} flight line(s), numbered from 0",
-            world.lines.len()
+            flight.lines().len()
         )));
     };
-    let pulses = survey.pulses_of(flight_line);
+    let pulses = flight.line_pulses()[line];
     if pulse >= pulses {
         return Err(PyIndexError::new_err(format!(
             "pulse {pulse}: flight line {line} has {pulses} pulses, numbered from 0"
         )));
     }
-    let sim = Simulator::new(survey, &world);
-    let mut scratch = Scratch::default();
-    let mut points = Vec::new();
-    let emitted = py
-        .detach(|| sim.simulate_pulse(flight_line, pulse, &mut scratch, &mut points))
-        .is_some();
+    let survey = flight.survey();
+    let sim = Simulator::new(survey, flight.world());
+    let detail = py.detach(|| sim.replay(flight_line, pulse));
     let bin_s = survey.receiver.bin_s;
-    let wf = scratch.waveform();
+    let wf = &detail.waveform;
     let bins: Vec<f64> = (0..wf.samples.len())
         .map(|i| (wf.first_bin + i as i64) as f64)
         .collect();
     let out = PyDict::new(py);
-    out.set_item("emitted", emitted)?;
+    out.set_item("emitted", detail.emitted)?;
     out.set_item(
         "time_ns",
         array(py, bins.iter().map(|b| b * bin_s * 1e9).collect()),
@@ -74,7 +70,7 @@ pub fn waveform<'py>(
         ),
     )?;
     out.set_item("threshold", sim.detector().threshold())?;
-    let returns = scratch.returns();
+    let returns = &detail.returns;
     out.set_item(
         "returns_range_m",
         array(py, returns.iter().map(|r| r.range_m).collect()),
@@ -83,7 +79,7 @@ pub fn waveform<'py>(
         "returns_power",
         array(py, returns.iter().map(|r| r.power).collect()),
     )?;
-    let echoes = scratch.echoes();
+    let echoes = &detail.echoes;
     out.set_item(
         "echo_range_m",
         array(py, echoes.iter().map(|e| e.range_m).collect()),
@@ -100,10 +96,10 @@ pub fn waveform<'py>(
         "echo_width_ns",
         array(py, echoes.iter().map(|e| e.width_ns).collect()),
     )?;
-    let settings = lidarsim::files::las_settings(survey, &world);
+    let settings = flight.las_settings();
     let mut packed = Vec::new();
-    for p in &points {
-        pack(&settings, p, &mut packed).map_err(|e| PyOSError::new_err(e.to_string()))?;
+    for p in &detail.points {
+        pack(&settings, p, &mut packed).map_err(|e| point_error(&e))?;
     }
     out.set_item("points", PyArray1::from_vec(py, packed))?;
     Ok(out.into_any())

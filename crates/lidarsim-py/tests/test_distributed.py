@@ -139,37 +139,56 @@ def test_a_run_on_a_local_cluster_is_the_unsplit_run(client, tmp_path, shared):
     assert not (tmp_path / "merged.parts").exists()
 
 
+def set_env(values, dask_worker=None, dask_nanny=None):
+    """Sets (a value) or removes (None) environment variables."""
+    for k, v in values.items():
+        if v is None:
+            os.environ.pop(k, None)
+        else:
+            os.environ[k] = v
+
+
 def test_a_worker_killed_mid_part_still_gives_the_unsplit_run(client, tmp_path):
-    # Longer parts (600 000 pulses each, about a second), so that a part is
-    # running when its worker is killed; the scheduler runs it again on a
-    # new worker.
-    long_lines = LINES.replace("-15.0", "-150.0").replace(" 15.0", " 150.0")
-    s = lidarsim.Survey.from_toml(
-        SURVEY.replace("prf_hz = 25000", "prf_hz = 100000").replace(
-            '"las-waveform", "laz", "xyz"', '"las"'
-        )
-        + long_lines
-    )
+    # Every part is held after 1000 pulses (the test hook of src/hold.rs)
+    # until the release file appears, so that a worker with a part is
+    # killed while the part is certainly running, not after a guessed
+    # time; the scheduler runs the part again on the worker its nanny
+    # starts (which inherits the nanny's environment, hold included).
+    s = lidarsim.Survey.from_toml(SURVEY.replace('"las-waveform", "laz", "xyz"', '"las"') + LINES)
     s.run_to(tmp_path / "whole", threads=2, progress=False)
+    release = tmp_path / "release"
+    hold = {"LIDARSIM_TEST_HOLD_AT_PULSE": "1000", "LIDARSIM_TEST_HOLD_UNTIL": str(release)}
+    client.run(set_env, hold)
+    client.run(set_env, hold, nanny=True)
     pids = client.run(os.getpid)
 
     def kill_a_busy_worker():
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            busy = [w for w, tasks in client.processing().items() if tasks]
-            if busy:
-                os.kill(pids[busy[0]], signal.SIGKILL)
-                return pids[busy[0]]
-            time.sleep(0.02)
-        return None
+        # A part is held from its first thousand pulses until the release:
+        # a worker seen with a part is killed mid-part.
+        try:
+            deadline = time.monotonic() + 120
+            while time.monotonic() < deadline:
+                busy = [w for w, tasks in client.processing().items() if tasks]
+                if busy:
+                    os.kill(pids[busy[0]], signal.SIGKILL)
+                    return pids[busy[0]]
+                time.sleep(0.02)
+            return None
+        finally:
+            release.write_text("go")
 
     import threading
 
     killed = []
     t = threading.Thread(target=lambda: killed.append(kill_a_busy_worker()))
     t.start()
-    lidarsim.distributed.run(s, client, tmp_path / "merged", parts=4, progress=False)
-    t.join()
+    try:
+        lidarsim.distributed.run(s, client, tmp_path / "merged", parts=4, progress=False)
+    finally:
+        t.join()
+        unset = {k: None for k in hold}
+        client.run(set_env, unset)
+        client.run(set_env, unset, nanny=True)
     assert killed and killed[0] is not None
     assert killed[0] not in client.run(os.getpid).values()
     assert_same_run(tmp_path / "whole", tmp_path / "merged")
@@ -185,10 +204,11 @@ def test_parts_from_python_merge_and_bad_merges_are_refused(tmp_path):
     for k, d in zip((2, 3, 1), (dirs[1], dirs[2], dirs[0])):
         record = s.run_part(d, k, 3, threads=1)
         assert record["complete"] and record["part"] == k and record["parts"] == 3
-    with pytest.raises(OSError, match="part 2/3 is missing"):
+    with pytest.raises(lidarsim.PartError, match="part 2/3 is missing"):
         lidarsim.merge([dirs[0], dirs[2]], tmp_path / "bad")
-    with pytest.raises(OSError, match="given twice"):
+    with pytest.raises(lidarsim.PartError, match="given twice") as e:
         lidarsim.merge([dirs[0], dirs[1], dirs[1], dirs[2]], tmp_path / "bad2")
+    assert e.value.path == str(dirs[1])
     lidarsim.merge([dirs[2], dirs[0], dirs[1]], tmp_path / "merged")
     assert_same_run(tmp_path / "whole", tmp_path / "merged")
     with pytest.raises(ValueError, match="K must be from 1 to N"):
@@ -214,12 +234,13 @@ def test_a_merge_uses_the_built_world_of_the_parts_survey_and_no_other(tmp_path)
         s.run_part(d, k, 2, threads=1)
     other_seed = shed_survey(tmp_path / "other.obj", seed=30)
     other_seed.build()
-    # With the scene's file gone, a merge that reads the scene again fails:
-    # one given no survey, a survey of another seed, or the parts' survey
-    # with no world built.
+    # With the scene's file gone, a merge that reads the scene again fails
+    # as building the parts' survey fails (its key, file and line): one
+    # given no survey, a survey of another seed, or the parts' survey with
+    # no world built.
     shed.unlink()
     for i, given in enumerate([None, other_seed, not_built]):
-        with pytest.raises(OSError, match="shed.obj"):
+        with pytest.raises(lidarsim.SurveyError, match="shed.obj"):
             lidarsim.merge(dirs, tmp_path / f"bad{i}", survey=given)
     lidarsim.merge(dirs, tmp_path / "merged", survey=s)
     assert_same_run(tmp_path / "whole", tmp_path / "merged")

@@ -158,12 +158,14 @@ fn share_over_scene(survey: &Survey, line: &crate::sensor::platform::FlightLine,
     over as f64 / f64::from(samples)
 }
 
-/// Estimates the run of `survey` over `scene` on `threads` threads.
-pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
+/// Estimates the run of `survey` over `world` on `threads` threads, its
+/// flight lines of `line_pulses` pulse slots each
+/// ([`crate::flight::Flight::estimate`] gives them).
+pub fn estimate(survey: &Survey, world: &World, line_pulses: &[u64], threads: usize) -> Budget {
     let (scene, lines) = (world.scene(), &world.lines[..]);
     let o = &survey.output;
     let f = &o.formats;
-    let pulses: u64 = lines.iter().map(|l| survey.pulses_of(l)).sum();
+    let pulses: u64 = line_pulses.iter().sum();
     let b = world.scene_bounds();
     let cover = crown_cover(scene, b);
     let extra = EXTRA_RETURNS_UNDER_CROWNS.min(survey.detector.max_returns as f64 - 1.0);
@@ -173,7 +175,8 @@ pub fn estimate(survey: &Survey, world: &World, threads: usize) -> Budget {
     let fired = survey.scanner.deflector.emitted_share();
     let over: f64 = lines
         .iter()
-        .map(|l| survey.pulses_of(l) as f64 * fired * share_over_scene(survey, l, b))
+        .zip(line_pulses)
+        .map(|(l, &n)| n as f64 * fired * share_over_scene(survey, l, b))
         .sum();
     let points = (over * per_pulse).ceil() as u64;
     // The largest coordinate written, for the text formats.

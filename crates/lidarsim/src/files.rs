@@ -5,7 +5,7 @@
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
-use crate::output::{AtomicFile, LasSettings};
+use crate::output::{AtomicFile, LasSettings, WriteError};
 use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
 use crate::survey::{Layout, Survey};
@@ -352,12 +352,12 @@ pub fn write_trajectory(
     lines: &[FlightLine],
     paths: &[&Path],
     observed: bool,
-) -> io::Result<()> {
+) -> Result<(), WriteError> {
     let mut files = paths
         .iter()
         .map(|p| AtomicFile::create(p))
-        .collect::<io::Result<Vec<_>>>()?;
-    let write_all = |files: &mut [AtomicFile], row: &[u8]| -> io::Result<()> {
+        .collect::<Result<Vec<_>, _>>()?;
+    let write_all = |files: &mut [AtomicFile], row: &[u8]| -> Result<(), WriteError> {
         for f in files.iter_mut() {
             f.writer().write_all(row).map_err(|e| f.error(e))?;
         }

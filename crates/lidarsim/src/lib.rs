@@ -68,7 +68,9 @@ pub mod canopy;
 pub mod compare;
 pub mod demo;
 pub mod detection;
+pub mod error;
 pub mod files;
+pub mod flight;
 pub mod geometry;
 pub mod io;
 pub mod kernels;
@@ -92,5 +94,7 @@ pub mod twin;
 pub mod waveform;
 pub mod world;
 
+pub use error::Error;
+pub use flight::Flight;
 pub use survey::Survey;
 pub use world::World;

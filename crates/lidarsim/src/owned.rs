@@ -5,8 +5,9 @@
 //! keeps everything else. A run's directory has its own, richer rules
 //! (`run::outdir`).
 
-use std::io;
 use std::path::Path;
+
+use crate::output::{AtFile, WriteCause, WriteError};
 
 /// Files a command writes into a directory, and the marker that says it
 /// wrote there.
@@ -33,22 +34,17 @@ impl OwnFiles {
     /// of an earlier write removed (a symbolic link itself, never what it
     /// points to). Errors are the directory's or the file's, with a message
     /// that says what to do.
-    pub fn claim(
-        &self,
-        dir: &Path,
-        overwrite: bool,
-    ) -> Result<(), (std::path::PathBuf, io::Error)> {
-        let fail = |e: io::Error| (dir.to_path_buf(), e);
+    pub fn claim(&self, dir: &Path, overwrite: bool) -> Result<(), WriteError> {
+        let refused = |why: String| WriteError::new(dir, WriteCause::Refused(why));
         if dir.exists() && !dir.is_dir() {
-            return Err(fail(io::Error::new(
-                io::ErrorKind::AlreadyExists,
-                "is not a directory: choose a directory for the output",
-            )));
+            return Err(refused(
+                "is not a directory: choose a directory for the output".into(),
+            ));
         }
-        std::fs::create_dir_all(dir).map_err(fail)?;
+        std::fs::create_dir_all(dir).at(dir)?;
         let (mut own, mut foreign) = (Vec::new(), Vec::new());
-        for entry in std::fs::read_dir(dir).map_err(fail)? {
-            let entry = entry.map_err(fail)?;
+        for entry in std::fs::read_dir(dir).at(dir)? {
+            let entry = entry.at(dir)?;
             let name = entry.file_name().to_string_lossy().into_owned();
             if self.owns(&name) {
                 own.push(entry.path());
@@ -64,35 +60,31 @@ impl OwnFiles {
                 .cloned()
                 .collect::<Vec<_>>()
                 .join(", ");
-            return Err(fail(io::Error::new(
-                io::ErrorKind::AlreadyExists,
-                format!(
-                    "the directory is not empty and no {} wrote it (it holds {shown}{}): choose \
-                     a new or empty directory, or pass --overwrite to replace only its own \
-                     files ({}) and keep the rest",
-                    self.command,
-                    if foreign.len() > 5 { " and more" } else { "" },
-                    self.files.join(", ")
-                ),
+            return Err(refused(format!(
+                "the directory is not empty and no {} wrote it (it holds {shown}{}): choose a \
+                 new or empty directory, or pass --overwrite to replace only its own files ({}) \
+                 and keep the rest",
+                self.command,
+                if foreign.len() > 5 { " and more" } else { "" },
+                self.files.join(", ")
             )));
         }
         for path in own {
             if std::fs::symlink_metadata(&path).is_ok_and(|m| m.is_dir()) {
-                return Err((
-                    path,
-                    io::Error::new(
-                        io::ErrorKind::AlreadyExists,
-                        "is a directory where a file is written: move it away",
+                return Err(WriteError::new(
+                    &path,
+                    WriteCause::Refused(
+                        "is a directory where a file is written: move it away".into(),
                     ),
                 ));
             }
-            std::fs::remove_file(&path).map_err(|e| (path.clone(), e))?;
+            std::fs::remove_file(&path).at(&path)?;
         }
         Ok(())
     }
 
     /// Writes the marker (last, once the files are whole).
-    pub fn mark(&self, dir: &Path) -> Result<(), (std::path::PathBuf, io::Error)> {
+    pub fn mark(&self, dir: &Path) -> Result<(), WriteError> {
         let path = dir.join(self.marker);
         crate::output::write_atomic(
             &path,
@@ -102,7 +94,6 @@ impl OwnFiles {
             )
             .as_bytes(),
         )
-        .map_err(|e| (path, e))
     }
 }
 
@@ -123,7 +114,7 @@ mod tests {
         std::fs::create_dir_all(&d).unwrap();
         std::fs::write(d.join("notes.txt"), "mine").unwrap();
         std::fs::write(d.join("a.json"), "old").unwrap();
-        let (_, e) = OWN.claim(&d, false).unwrap_err();
+        let e = OWN.claim(&d, false).unwrap_err();
         assert!(e.to_string().contains("notes.txt") && e.to_string().contains("--overwrite"));
         assert_eq!(std::fs::read(d.join("a.json")).unwrap(), b"old");
         OWN.claim(&d, true).unwrap();

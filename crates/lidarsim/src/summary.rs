@@ -6,10 +6,9 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Serialize};
 
 use crate::budget::Budget;
+use crate::flight::Flight;
 use crate::plan::Plan;
 use crate::sim::{PulsePosition, RunCounts};
-use crate::survey::Survey;
-use crate::world::World;
 
 /// Contents of `summary.json`.
 #[derive(Clone, Debug, Serialize)]
@@ -84,7 +83,7 @@ pub struct Summary {
     pub estimate: Budget,
 }
 
-/// What a run measured, beside the survey and its plan.
+/// What a run measured, beside its flight.
 pub struct Measured {
     /// Counts over every session of the run.
     pub counts: RunCounts,
@@ -92,33 +91,23 @@ pub struct Measured {
     pub threads: usize,
     /// Simulation time over every session, s.
     pub wall_time_s: f64,
-    /// Time to build the acceleration structure, s.
-    pub index_time_s: f64,
-    /// Primitives in the scene.
-    pub scene_primitives: usize,
     /// The expected cost of the run.
     pub estimate: Budget,
 }
 
 impl Summary {
-    /// The summary of a complete run of `survey` (the interrupted fields
-    /// unset), its warnings followed by `scene_warnings`.
-    pub fn of(
-        survey: &Survey,
-        world: &World,
-        plan: Plan,
-        m: &Measured,
-        files: Vec<String>,
-        scene_warnings: &[String],
-    ) -> Self {
+    /// The summary of a complete run of `flight` that wrote `files` (the
+    /// interrupted fields unset), with the flight's warnings and one when
+    /// the run recorded no point.
+    pub fn of(flight: &Flight, m: &Measured, files: Vec<String>) -> Self {
+        let (survey, world, plan) = (flight.survey(), flight.world(), flight.plan().clone());
         let counts = &m.counts;
         let last = counts
             .points_by_return
             .iter()
             .rposition(|&n| n > 0)
             .map_or(0, |i| i + 1);
-        let mut warnings = world.warnings_with(survey);
-        warnings.extend_from_slice(scene_warnings);
+        let mut warnings = flight.warnings().to_vec();
         warnings.extend(no_point_warning(counts.pulses, counts.points));
         Summary {
             lidarsim_version: env!("CARGO_PKG_VERSION"),
@@ -137,7 +126,7 @@ impl Summary {
             subrays_per_pulse: survey.scanner.subrays,
             wavelength_nm: survey.scanner.wavelength_nm,
             wall_time_s: m.wall_time_s,
-            index_time_s: m.index_time_s,
+            index_time_s: world.index_time_s,
             pulses_per_second: if m.wall_time_s > 0.0 {
                 counts.pulses as f64 / m.wall_time_s
             } else {
@@ -153,7 +142,7 @@ impl Summary {
             },
             intensity_gain: survey.intensity_gain,
             reference_range_m: survey.receiver.reference_range_m,
-            scene_primitives: m.scene_primitives,
+            scene_primitives: world.scene().primitives.len(),
             files,
             warnings,
             forest_trees: world.forest_trees.clone(),

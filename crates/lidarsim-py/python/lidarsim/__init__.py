@@ -18,8 +18,14 @@ NumPy structured array with the fields of the LAS file::
     twin = lidarsim.twin("scan.laz", "twin")  # a survey that re-flies a real scan
     c = lidarsim.compare("scan.laz", twin.run())  # the field's metrics, side by side
 
-A survey with problems raises :class:`SurveyError`, whose message names
-every key at fault. The simulation runs with the GIL released on every
+A survey with problems raises :class:`SurveyError` (a ``ValueError``),
+whose message names every key at fault. A file that cannot be read,
+written, joined or continued raises the ``OSError`` of its kind, with the
+file in ``e.path``: :class:`InputError` (a file a run reads),
+:class:`OutputError` (a file or directory it writes), :class:`PartError`
+(a part of a split run refused), :class:`ResumeError` (an interrupted run
+that cannot be continued) and :class:`BudgetError` (a run that would not
+fit the disk or memory, refused before it starts). The simulation runs with the GIL released on every
 core; Ctrl-C raises ``KeyboardInterrupt`` within a block of pulses.
 """
 
@@ -34,14 +40,26 @@ from typing import Any, Callable, Dict, Iterator, Mapping, Optional, Union
 import numpy as np
 
 from . import _lidarsim
-from ._lidarsim import SurveyError
+from ._lidarsim import (
+    BudgetError,
+    InputError,
+    OutputError,
+    PartError,
+    ResumeError,
+    SurveyError,
+)
 
 __all__ = [
+    "BudgetError",
+    "InputError",
+    "OutputError",
+    "PartError",
     "POINT_DTYPE",
     "compare",
     "merge",
     "TRAJECTORY_DTYPE",
     "Result",
+    "ResumeError",
     "Survey",
     "SurveyError",
     "Waveform",
@@ -637,7 +655,7 @@ def merge(
     """Merges the directories of the parts of one split run (in any order)
     into ``out_dir``: the files the unsplit run writes, byte for byte
     (``summary.json``'s timings apart); returns the summary. Refuses, with
-    an ``OSError`` naming it, a part missing, given twice, unfinished,
+    a :class:`PartError` naming it, a part missing, given twice, unfinished,
     changed, or of another survey, seed or number of parts. ``take_parts``:
     move the first part's LAS file into ``out_dir`` rather than copy it,
     and remove the parts' directories once merged. ``survey``: the survey

@@ -12,6 +12,21 @@ TRAJECTORY_FIELDS: List[Tuple[str, str]]
 class SurveyError(ValueError):
     diagnostics: List[Dict[str, Any]]
 
+class InputError(OSError):
+    path: str
+
+class OutputError(OSError):
+    path: str
+
+class PartError(OSError):
+    path: str
+
+class ResumeError(OSError):
+    path: str
+
+class BudgetError(OSError):
+    path: str
+
 def merge(
     part_dirs: List[str],
     out_dir: str,

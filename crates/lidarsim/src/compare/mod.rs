@@ -317,15 +317,20 @@ pub fn write_comparison(
     c: &Comparison,
     dir: &std::path::Path,
     overwrite: bool,
-) -> Result<(), (std::path::PathBuf, std::io::Error)> {
+) -> Result<(), crate::output::WriteError> {
     OWN.claim(dir, overwrite)?;
-    let json = serde_json::to_string_pretty(c).map_err(|e| (dir.join("compare.json"), e.into()))?;
+    let json = serde_json::to_string_pretty(c).map_err(|e| {
+        crate::output::WriteError::new(
+            &dir.join("compare.json"),
+            crate::output::WriteCause::Unsupported(e.to_string()),
+        )
+    })?;
     for (name, text) in [
         ("compare.json", json + "\n"),
         ("compare.html", html::page(c)),
     ] {
         let path = dir.join(name);
-        crate::output::write_atomic(&path, text.as_bytes()).map_err(|e| (path, e))?;
+        crate::output::write_atomic(&path, text.as_bytes())?;
     }
     OWN.mark(dir)
 }

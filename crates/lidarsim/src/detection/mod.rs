@@ -68,6 +68,40 @@ impl ReturnSelection {
     }
 }
 
+/// How a receiver turns its waveform into returns.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum EchoDetection {
+    /// A discrete-return receiver (the default): an echo triggers when the
+    /// signal rises above the threshold, after which the receiver is blind
+    /// for the minimum separation and re-arms only once the signal has
+    /// fallen below the threshold again; what it does not re-arm for
+    /// belongs to the echo before.
+    #[default]
+    Discrete,
+    /// Online waveform processing: every maximum that stands out is an
+    /// echo, apart from the minimum separation.
+    Waveform,
+}
+
+impl EchoDetection {
+    /// The mode named `name` in a survey file.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "discrete" => Some(Self::Discrete),
+            "waveform" => Some(Self::Waveform),
+            _ => None,
+        }
+    }
+
+    /// Its name in a survey file.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Discrete => "discrete",
+            Self::Waveform => "waveform",
+        }
+    }
+}
+
 /// Detection settings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DetectorConfig {
@@ -79,6 +113,11 @@ pub struct DetectorConfig {
     pub max_returns: usize,
     /// Which echoes are kept when there are more.
     pub selection: ReturnSelection,
+    /// How echoes become returns.
+    pub detection: EchoDetection,
+    /// Least range between two returns of a pulse (the receiver's dead
+    /// zone after an echo, its multi-target resolution), m.
+    pub min_separation_m: f64,
 }
 
 /// One detected echo.
@@ -90,7 +129,10 @@ pub struct Echo {
     pub range_m: f64,
     /// Fitted peak above the background, amplitude units.
     pub peak_amplitude: f64,
-    /// Energy amplitude (see the module documentation).
+    /// The amplitude the receiver records: the energy amplitude (see the
+    /// module documentation) with waveform processing, the fitted peak
+    /// with a discrete-return receiver, whose intensity is the peak of the
+    /// pulse it triggered on (Wagner 2010, ISPRS J. 65(6): 505–513).
     pub amplitude: f64,
     /// Full width at half maximum, ns: the emitted pulse's FWHM times the
     /// energy amplitude over the peak amplitude (see the module
@@ -120,6 +162,8 @@ pub struct Detector {
     fit_half: usize,
     /// FWHM of the emitted pulse, ns.
     pulse_fwhm_ns: f64,
+    /// The minimum separation of returns, bins.
+    dead_bins: f64,
 }
 
 impl Detector {
@@ -136,7 +180,6 @@ impl Detector {
         let bias = bias_table(receiver, fit_half);
         let unit_energy = energy(kernel, k0, width, 0, kernel.len() - 1);
         Self {
-            config,
             threshold,
             bin_s: rx.bin_s,
             bias,
@@ -144,6 +187,8 @@ impl Detector {
             min_width_bins: 0.5 * width,
             fit_half,
             pulse_fwhm_ns: rx.pulse.fwhm_s() * 1e9,
+            dead_bins: crate::waveform::range_to_bin(config.min_separation_m, rx.bin_s),
+            config,
         }
     }
 
@@ -224,7 +269,12 @@ impl Detector {
                 bin,
                 range_m: bin_to_range(bin, self.bin_s),
                 peak_amplitude,
-                amplitude,
+                // A discrete receiver records the echo's peak; waveform
+                // processing its energy.
+                amplitude: match self.config.detection {
+                    EchoDetection::Discrete => peak_amplitude,
+                    EchoDetection::Waveform => amplitude,
+                },
                 width_ns,
                 first_bin: wf.first_bin + lo.max(p.saturating_sub(reach)) as i64,
                 last_bin: wf.first_bin + hi.min(p + reach) as i64,
@@ -332,6 +382,7 @@ impl Detector {
             }
             peaks.remove(k);
         }
+        self.merge_unresolved(s, peaks, valleys, widths);
         // Every echo's bounds, then the ones the receiver keeps.
         bounds.extend((0..peaks.len()).map(|k| {
             let lo = if k == 0 { 0 } else { valleys[k - 1] };
@@ -354,6 +405,41 @@ impl Detector {
             }
         }
         valleys.clear();
+    }
+}
+
+impl Detector {
+    /// Merges each maximum the receiver cannot tell from the echo before
+    /// it into that echo: one nearer than the minimum separation (its dead
+    /// zone), and for a discrete receiver one it has not re-armed for (the
+    /// signal did not fall below the threshold between them). The echo
+    /// keeps its position (the receiver triggered on it) and takes the
+    /// merged samples, so its energy holds theirs.
+    fn merge_unresolved(
+        &self,
+        s: &[f64],
+        peaks: &mut Vec<usize>,
+        valleys: &mut Vec<usize>,
+        widths: &mut Vec<(usize, usize, f64)>,
+    ) {
+        let discrete = self.config.detection == EchoDetection::Discrete;
+        if !discrete && self.dead_bins <= 0.0 {
+            return;
+        }
+        let mut k = 1;
+        while k < peaks.len() {
+            let rearmed = !discrete || s[valleys[k - 1]] < self.threshold;
+            let apart = (peaks[k] - peaks[k - 1]) as f64 >= self.dead_bins;
+            if rearmed && apart {
+                k += 1;
+                continue;
+            }
+            // The lowest point after the merged maximum now ends the echo.
+            valleys.remove(k - 1);
+            peaks.remove(k);
+            widths.remove(k);
+            widths[k - 1].2 = f64::NAN;
+        }
     }
 }
 

@@ -41,6 +41,38 @@ fn select_by_definition(det: &Detector, s: &[f64]) -> (Vec<usize>, Vec<(usize, u
             k += 1;
         }
     }
+    // The receiver's resolution: a maximum within the dead zone of the
+    // last echo kept, or (discrete) without a fall below the threshold
+    // since the maximum before it, belongs to that echo.
+    // Each echo as (its maximum, the last maximum merged into it): its
+    // samples run from the lowest point before its maximum to the lowest
+    // point after the last one merged.
+    let discrete = det.config.detection == EchoDetection::Discrete;
+    let mut resolved: Vec<(usize, usize)> = Vec::new();
+    for (k, &p) in peaks.iter().enumerate() {
+        match resolved.last_mut() {
+            Some((first, last))
+                if !((s[argmin(s, peaks[k - 1], p)] < thr || !discrete)
+                    && (p - *first) as f64 >= det.dead_bins) =>
+            {
+                *last = p;
+            }
+            _ => resolved.push((p, p)),
+        }
+    }
+    let extent = |k: usize| {
+        let lo = if k == 0 {
+            0
+        } else {
+            argmin(s, resolved[k - 1].1, resolved[k].0)
+        };
+        let hi = match resolved.get(k + 1) {
+            Some(next) => argmin(s, resolved[k].1, next.0),
+            None => s.len() - 1,
+        };
+        (lo, hi)
+    };
+    let peaks: Vec<usize> = resolved.iter().map(|r| r.0).collect();
     let mut kept: Vec<usize> = (0..peaks.len()).collect();
     let m = det.config.max_returns;
     if kept.len() > m {
@@ -53,7 +85,7 @@ fn select_by_definition(det: &Detector, s: &[f64]) -> (Vec<usize>, Vec<(usize, u
             }
         }
     }
-    let bounds = kept.iter().map(|&k| extent(&peaks, k)).collect();
+    let bounds = kept.iter().map(|&k| extent(k)).collect();
     (kept.iter().map(|&k| peaks[k]).collect(), bounds)
 }
 
@@ -125,6 +157,12 @@ fn one_pass_selection_matches_the_definition() {
                 } else {
                     ReturnSelection::First
                 },
+                detection: if case % 4 < 2 {
+                    EchoDetection::Discrete
+                } else {
+                    EchoDetection::Waveform
+                },
+                min_separation_m: [0.0, 0.3, 1.0, 2.7][case % 5 % 4],
             },
             &rx,
         );
@@ -200,6 +238,8 @@ fn setup(pulse: PulseShape, noise: f64) -> (Receiver, Detector) {
             min_amplitude: 0.005,
             max_returns: 5,
             selection: ReturnSelection::default(),
+            detection: EchoDetection::Waveform,
+            min_separation_m: 0.0,
         },
         &rx,
     );

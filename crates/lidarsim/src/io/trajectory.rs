@@ -28,88 +28,128 @@ pub fn read_trajectory(
     let Some((_, header)) = rows.next() else {
         return Err(format!("'{}' is empty", path.display()));
     };
-    let names: Vec<&str> = header.split(',').map(str::trim).collect();
-    if let Some((i, name)) = names
-        .iter()
-        .enumerate()
-        .find(|(i, n)| names[..*i].contains(n))
-    {
-        return Err(format!(
-            "'{}' line 1: column {} is named `{name}`, as column {} is: name each column once",
-            path.display(),
-            i + 1,
-            names.iter().position(|n| n == name).unwrap_or(0) + 1
-        ));
+    let columns = Columns::of_header(path, header)?;
+    let mut segments: Vec<Segment> = Vec::new();
+    for (n, row) in rows {
+        let (key, sample) = columns.row(path, n, row)?;
+        add_sample(path, &mut segments, n, key, sample)?;
     }
-    // Columns of one meaning under two of its names are just as ambiguous.
-    let col = |want: &[&str]| -> Result<Option<usize>, String> {
-        let found: Vec<usize> = (0..names.len())
-            .filter(|&i| want.contains(&names[i]))
-            .collect();
-        match found.as_slice() {
-            [] => Ok(None),
-            [i] => Ok(Some(*i)),
-            [i, j, ..] => Err(format!(
-                "'{}' line 1: columns {} (`{}`) and {} (`{}`) both give {}: keep one",
+    let t0 = segments
+        .first()
+        .map(|s| s.samples[0].0)
+        .ok_or_else(|| format!("'{}' holds no trajectory rows", path.display()))?;
+    segments
+        .into_iter()
+        .map(|Segment { key, samples }| {
+            let start = samples[0].0 - t0;
+            Track::new(&samples, interpolation)
+                .map(|t| (start, t))
+                .ok_or_else(|| {
+                    format!(
+                        "'{}': line '{key}' needs at least two rows with increasing times",
+                        path.display()
+                    )
+                })
+        })
+        .collect()
+}
+
+/// The columns a trajectory needs, as messages name them.
+const WANTED: [&str; 7] = [
+    "time_s",
+    "x_m",
+    "y_m",
+    "z_m",
+    "roll_deg",
+    "pitch_deg",
+    "yaw_deg",
+];
+
+/// The names each of `WANTED` may have in a header.
+const NAMES: [&[&str]; 7] = [
+    &["time_s", "gps_time_s", "time"],
+    &["x_m", "x"],
+    &["y_m", "y"],
+    &["z_m", "z"],
+    &["roll_deg", "roll"],
+    &["pitch_deg", "pitch"],
+    &["yaw_deg", "yaw"],
+];
+
+/// Where a file's header puts each column.
+struct Columns<'a> {
+    /// The header's names, in order.
+    names: Vec<&'a str>,
+    /// The column of each of `WANTED`.
+    wanted: [usize; 7],
+    /// The column of `line`, if any.
+    line: Option<usize>,
+}
+
+/// Consecutive rows of one `line` value.
+struct Segment {
+    key: String,
+    samples: Vec<TrackSample>,
+}
+
+impl<'a> Columns<'a> {
+    /// The header's columns: each named once, every wanted one there.
+    fn of_header(path: &Path, header: &'a str) -> Result<Self, String> {
+        let names: Vec<&str> = header.split(',').map(str::trim).collect();
+        if let Some((i, name)) = names
+            .iter()
+            .enumerate()
+            .find(|(i, n)| names[..*i].contains(n))
+        {
+            return Err(format!(
+                "'{}' line 1: column {} is named `{name}`, as column {} is: name each column once",
                 path.display(),
                 i + 1,
-                names[*i],
-                j + 1,
-                names[*j],
-                want[0]
-            )),
+                names.iter().position(|n| n == name).unwrap_or(0) + 1
+            ));
         }
-    };
-    let need = [
-        col(&["time_s", "gps_time_s", "time"])?,
-        col(&["x_m", "x"])?,
-        col(&["y_m", "y"])?,
-        col(&["z_m", "z"])?,
-        col(&["roll_deg", "roll"])?,
-        col(&["pitch_deg", "pitch"])?,
-        col(&["yaw_deg", "yaw"])?,
-    ];
-    let wanted = [
-        "time_s",
-        "x_m",
-        "y_m",
-        "z_m",
-        "roll_deg",
-        "pitch_deg",
-        "yaw_deg",
-    ];
-    let mut idx = [0usize; 7];
-    for (k, c) in need.iter().enumerate() {
-        match c {
-            Some(i) => idx[k] = *i,
-            None => {
-                return Err(format!(
-                    "'{}' line 1: no column `{}` (the header must name: {})",
-                    path.display(),
-                    wanted[k],
-                    wanted.join(", ")
-                ));
+        let mut found = [None; 7];
+        for (k, want) in NAMES.iter().enumerate() {
+            found[k] = column(path, &names, want)?;
+        }
+        let mut wanted = [0usize; 7];
+        for (k, c) in found.iter().enumerate() {
+            match c {
+                Some(i) => wanted[k] = *i,
+                None => {
+                    return Err(format!(
+                        "'{}' line 1: no column `{}` (the header must name: {})",
+                        path.display(),
+                        WANTED[k],
+                        WANTED.join(", ")
+                    ));
+                }
             }
         }
+        let line = column(path, &names, &["line"])?;
+        Ok(Columns {
+            names,
+            wanted,
+            line,
+        })
     }
-    let line_col = col(&["line"])?;
-    // Consecutive rows of one `line` value, as (line value, samples).
-    let mut segments: Vec<(String, Vec<TrackSample>)> = Vec::new();
-    for (n, row) in rows {
+
+    /// Row `n` (0-based) as its line value and sample.
+    fn row(&self, path: &Path, n: usize, row: &str) -> Result<(String, TrackSample), String> {
         let cells: Vec<&str> = row.split(',').map(str::trim).collect();
-        if cells.len() != names.len() {
+        if cells.len() != self.names.len() {
             return Err(format!(
                 "'{}' line {}: {} values for the header's {} columns ({}); every row needs one \
                  value per column",
                 path.display(),
                 n + 1,
                 cells.len(),
-                names.len(),
-                names.join(", ")
+                self.names.len(),
+                self.names.join(", ")
             ));
         }
         let value = |k: usize| -> Result<f64, String> {
-            let cell = cells.get(idx[k]).copied().unwrap_or("");
+            let cell = cells.get(self.wanted[k]).copied().unwrap_or("");
             cell.parse::<f64>()
                 .ok()
                 .filter(|v| v.is_finite())
@@ -118,7 +158,7 @@ pub fn read_trajectory(
                         "'{}' line {}: `{}` is '{cell}', not a number",
                         path.display(),
                         n + 1,
-                        wanted[k]
+                        WANTED[k]
                     )
                 })
         };
@@ -128,7 +168,7 @@ pub fn read_trajectory(
                 "'{}' line {}: `{}` is {}, beyond ±{} m",
                 path.display(),
                 n + 1,
-                wanted[k],
+                WANTED[k],
                 num(v[k]),
                 num(MAX_COORDINATE_M)
             ));
@@ -138,12 +178,13 @@ pub fn read_trajectory(
                 "'{}' line {}: `{}` is {}°, beyond ±360°",
                 path.display(),
                 n + 1,
-                wanted[k],
+                WANTED[k],
                 num(v[k])
             ));
         }
         // Line values compare as numbers when they are numbers ("0" = "0.0").
-        let key = line_col
+        let key = self
+            .line
             .and_then(|i| cells.get(i))
             .map_or_else(String::new, |s| match s.parse::<f64>() {
                 Ok(v) => v.to_string(),
@@ -158,53 +199,72 @@ pub fn read_trajectory(
                 yaw_rad: v[6].to_radians(),
             },
         );
-        match segments.last_mut() {
-            Some((k, samples)) if *k == key => {
-                if sample.0 <= samples[samples.len() - 1].0 {
-                    return Err(format!(
-                        "'{}' line {}: times must increase",
-                        path.display(),
-                        n + 1
-                    ));
-                }
-                samples.push(sample);
-            }
-            Some((_, samples)) if sample.0 <= samples[samples.len() - 1].0 => {
+        Ok((key, sample))
+    }
+}
+
+/// The one column named by any of `want`. Columns of one meaning under
+/// two of its names are just as ambiguous as one name twice.
+fn column(path: &Path, names: &[&str], want: &[&str]) -> Result<Option<usize>, String> {
+    let found: Vec<usize> = (0..names.len())
+        .filter(|&i| want.contains(&names[i]))
+        .collect();
+    match found.as_slice() {
+        [] => Ok(None),
+        [i] => Ok(Some(*i)),
+        [i, j, ..] => Err(format!(
+            "'{}' line 1: columns {} (`{}`) and {} (`{}`) both give {}: keep one",
+            path.display(),
+            i + 1,
+            names[*i],
+            j + 1,
+            names[*j],
+            want[0]
+        )),
+    }
+}
+
+/// Adds the sample of row `n` to its line's segment: the last one, if of
+/// its line, or a new one; times increase within and across lines.
+fn add_sample(
+    path: &Path,
+    segments: &mut Vec<Segment>,
+    n: usize,
+    key: String,
+    sample: TrackSample,
+) -> Result<(), String> {
+    match segments.last_mut() {
+        Some(last) if last.key == key => {
+            if sample.0 <= last.samples[last.samples.len() - 1].0 {
                 return Err(format!(
-                    "'{}' line {}: line '{key}' starts before the previous line ends; \
-                     lines must follow each other in time",
+                    "'{}' line {}: times must increase",
                     path.display(),
                     n + 1
                 ));
             }
-            _ => {
-                if segments.iter().any(|(k, _)| *k == key) {
-                    return Err(format!(
-                        "'{}' line {}: line '{key}' appears again after other lines",
-                        path.display(),
-                        n + 1
-                    ));
-                }
-                segments.push((key, vec![sample]));
+            last.samples.push(sample);
+        }
+        Some(last) if sample.0 <= last.samples[last.samples.len() - 1].0 => {
+            return Err(format!(
+                "'{}' line {}: line '{key}' starts before the previous line ends; \
+                 lines must follow each other in time",
+                path.display(),
+                n + 1
+            ));
+        }
+        _ => {
+            if segments.iter().any(|s| s.key == key) {
+                return Err(format!(
+                    "'{}' line {}: line '{key}' appears again after other lines",
+                    path.display(),
+                    n + 1
+                ));
             }
+            segments.push(Segment {
+                key,
+                samples: vec![sample],
+            });
         }
     }
-    let t0 = segments
-        .first()
-        .map(|s| s.1[0].0)
-        .ok_or_else(|| format!("'{}' holds no trajectory rows", path.display()))?;
-    segments
-        .into_iter()
-        .map(|(key, samples)| {
-            let start = samples[0].0 - t0;
-            Track::new(&samples, interpolation)
-                .map(|t| (start, t))
-                .ok_or_else(|| {
-                    format!(
-                        "'{}': line '{key}' needs at least two rows with increasing times",
-                        path.display()
-                    )
-                })
-        })
-        .collect()
+    Ok(())
 }

@@ -281,10 +281,9 @@ impl<'a> Columns<'a> {
             self.number(fields, "bark_reflectance", (0.0, false, 1.0))?,
             &mut tree.bark_reflectance,
         );
-        set(
-            self.number(fields, "extinction_per_m", (0.0, false, 100.0))?,
-            &mut tree.extinction_per_m,
-        );
+        if let Some(k) = self.number(fields, "extinction_per_m", (0.0, false, 100.0))? {
+            tree.extinction_per_m = Some(k);
+        }
         tree.uniform_density = self.number(fields, "uniform_density", (0.0, false, 1.0))?;
         tree.seed = match self.find("seed").map(|c| (c, fields[c])) {
             Some((c, text)) if !text.is_empty() => text

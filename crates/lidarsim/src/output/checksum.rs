@@ -8,12 +8,10 @@
 use std::io::{self, Read};
 use std::path::Path;
 
-use super::file_error;
-
 /// The CRC-32 of the file at `path`, as eight lowercase hexadecimal
-/// digits; an error names the file.
+/// digits.
 pub fn file_crc32(path: &Path) -> io::Result<String> {
-    let mut file = std::fs::File::open(path).map_err(|e| file_error(path, e))?;
+    let mut file = std::fs::File::open(path)?;
     let mut hasher = crc32fast::Hasher::new();
     let mut buf = vec![0u8; 1 << 20];
     loop {
@@ -21,7 +19,7 @@ pub fn file_crc32(path: &Path) -> io::Result<String> {
             Ok(0) => break,
             Ok(n) => hasher.update(&buf[..n]),
             Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
-            Err(e) => return Err(file_error(path, e)),
+            Err(e) => return Err(e),
         }
     }
     Ok(format!("{:08x}", hasher.finalize()))

@@ -4,12 +4,12 @@
 //! LAS or LAZ file of the run's settings, its points in pulse order.
 
 use std::collections::BTreeMap;
-use std::io::{self, Read, Write};
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use super::part::{RECORD_BYTES, decode, encode};
+use super::{AtFile, PointRecord, PointSink, WriteError, write_atomic};
 use super::{LasSettings, LasWriter};
-use super::{PointRecord, PointSink, file_error, write_atomic};
 
 /// The file name of flight line `line` (from 1) in a strips directory.
 pub fn strip_name(line: u16, ext: &str) -> String {
@@ -27,8 +27,8 @@ pub struct StripWriter {
 
 impl StripWriter {
     /// Strips into `dir` (created), LAZ when `settings.compressed`.
-    pub fn create(dir: &Path, settings: LasSettings) -> io::Result<Self> {
-        std::fs::create_dir_all(dir).map_err(|e| file_error(dir, e))?;
+    pub fn create(dir: &Path, settings: LasSettings) -> Result<Self, WriteError> {
+        std::fs::create_dir_all(dir).at(dir)?;
         let ext = if settings.compressed { "laz" } else { "las" };
         Ok(Self {
             dir: dir.to_path_buf(),
@@ -40,7 +40,9 @@ impl StripWriter {
 }
 
 impl PointSink for StripWriter {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    type Error = WriteError;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteError> {
         for run in points.chunk_by(|a, b| a.point_source_id == b.point_source_id) {
             let line = run[0].point_source_id;
             if self.current.as_ref().map(|(l, _)| *l) != Some(line) {
@@ -58,7 +60,7 @@ impl PointSink for StripWriter {
         Ok(())
     }
 
-    fn finish(mut self: Box<Self>) -> io::Result<()> {
+    fn finish(mut self: Box<Self>) -> Result<(), WriteError> {
         match self.current.take() {
             Some((_, w)) => w.finish(),
             None => Ok(()),
@@ -67,7 +69,7 @@ impl PointSink for StripWriter {
 
     /// The lines done are whole strips; the one being written keeps its
     /// `.partial` name.
-    fn suspend(mut self: Box<Self>) -> io::Result<()> {
+    fn suspend(mut self: Box<Self>) -> Result<(), WriteError> {
         match self.current.take() {
             Some((_, w)) => w.suspend(),
             None => Ok(()),
@@ -120,8 +122,8 @@ impl TileWriter {
         settings: Vec<LasSettings>,
         tile_m: f64,
         origin_m: [f64; 3],
-    ) -> io::Result<Self> {
-        std::fs::create_dir_all(dir.join(SPILL_DIR)).map_err(|e| file_error(dir, e))?;
+    ) -> Result<Self, WriteError> {
+        std::fs::create_dir_all(dir.join(SPILL_DIR)).at(dir)?;
         Ok(Self {
             dir: dir.to_path_buf(),
             settings,
@@ -140,15 +142,15 @@ impl TileWriter {
     }
 
     /// Appends the points held to the tiles' spill files.
-    fn spill(&mut self) -> io::Result<()> {
+    fn spill(&mut self) -> Result<(), WriteError> {
         for (key, bytes) in std::mem::take(&mut self.held) {
             let path = self.spill_path(key);
             let mut f = std::fs::OpenOptions::new()
                 .create(true)
                 .append(true)
                 .open(&path)
-                .map_err(|e| file_error(&path, e))?;
-            f.write_all(&bytes).map_err(|e| file_error(&path, e))?;
+                .at(&path)?;
+            f.write_all(&bytes).at(&path)?;
         }
         self.held_bytes = 0;
         Ok(())
@@ -199,7 +201,9 @@ impl TileWriter {
 }
 
 impl PointSink for TileWriter {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    type Error = WriteError;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteError> {
         let (t, o) = (self.tile_m, self.origin_m);
         for p in points {
             let (x, y, z) = (
@@ -223,7 +227,7 @@ impl PointSink for TileWriter {
         Ok(())
     }
 
-    fn finish(mut self: Box<Self>) -> io::Result<()> {
+    fn finish(mut self: Box<Self>) -> Result<(), WriteError> {
         self.spill()?;
         let keys: Vec<(i64, i64)> = self.stats.keys().copied().collect();
         // A tile's points are read back a slice at a time.
@@ -231,8 +235,7 @@ impl PointSink for TileWriter {
         let mut points = Vec::new();
         for key in keys {
             let spill = self.spill_path(key);
-            let named = |e| file_error(&spill, e);
-            let mut f = std::fs::File::open(&spill).map_err(named)?;
+            let mut f = std::fs::File::open(&spill).at(&spill)?;
             let mut writers = Vec::new();
             for st in &self.settings {
                 let path = self.dir.join(self.name(key, st));
@@ -241,7 +244,7 @@ impl PointSink for TileWriter {
             loop {
                 let mut filled = 0;
                 while filled < buf.len() {
-                    match f.read(&mut buf[filled..]).map_err(named)? {
+                    match f.read(&mut buf[filled..]).at(&spill)? {
                         0 => break,
                         n => filled += n,
                     }
@@ -258,16 +261,16 @@ impl PointSink for TileWriter {
             for w in writers {
                 w.finish()?;
             }
-            std::fs::remove_file(&spill).map_err(named)?;
+            std::fs::remove_file(&spill).at(&spill)?;
         }
         let spill = self.dir.join(SPILL_DIR);
-        std::fs::remove_dir(&spill).map_err(|e| file_error(&spill, e))?;
+        std::fs::remove_dir(&spill).at(&spill)?;
         let index = self.dir.join("index.geojson");
-        write_atomic(&index, self.index().as_bytes()).map_err(|e| file_error(&index, e))
+        write_atomic(&index, self.index().as_bytes())
     }
 
     /// No tile is written for an interrupted run.
-    fn suspend(self: Box<Self>) -> io::Result<()> {
+    fn suspend(self: Box<Self>) -> Result<(), WriteError> {
         self.discard();
         Ok(())
     }

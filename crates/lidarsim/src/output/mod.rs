@@ -12,151 +12,64 @@ pub mod checksum;
 pub mod crs;
 #[cfg(target_os = "linux")]
 mod direct;
+mod error;
 mod las;
 pub mod layout;
 pub mod own;
 pub mod part;
 mod ply;
+mod record;
 pub mod text;
 mod xyz;
 
+pub use error::{AtFile, WriteCause, WriteError};
 pub use las::{
     Digitizer, HEADER_SIZE_14, HeaderError, JoinedLas, LasJoin, LasSettings, LasWriter,
     POINT_FORMAT_6_LEN, POINT_FORMAT_9_LEN, RawHeader, WAVEFORM_BITS, WAVEFORM_DESCRIPTORS,
     WAVEFORM_SAMPLES_STEP, WDP_HEADER_LEN, return_numbers, scan_angle_units,
 };
 pub use ply::{PLY_PROPERTIES, PLY_RECORD_LEN, PlyWriter};
+pub use record::{Component, NO_OBJECT, PointRecord, WaveformBlock, WaveformPacket};
 pub use xyz::XyzWriter;
 
 use std::fs::File;
 use std::io::{self, BufWriter, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-use crate::geometry::DVec3;
-
-/// [`PointRecord::object_id`] of an echo no object contributed to
-/// (receiver noise), as the point files write it.
-pub const NO_OBJECT: u32 = u32::MAX;
-
-/// One point of the output cloud: an echo with its attributes.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PointRecord {
-    /// Georeferenced position, world metres (specification Eq. 1).
-    pub position_m: DVec3,
-    /// Time of emission of the pulse, s, in the output time base.
-    pub gps_time_s: f64,
-    /// LAS intensity (energy amplitude × gain, clipped).
-    pub intensity: u16,
-    /// Energy amplitude of the echo, amplitude units.
-    pub amplitude: f64,
-    /// Echo width (FWHM), ns.
-    pub echo_width_ns: f64,
-    /// Measured range from the sensor, m.
-    pub range_m: f64,
-    /// Unit direction of the beam axis used to georeference the point
-    /// (`position = origin + beam_dir × range`), world frame.
-    pub beam_dir: DVec3,
-    /// Georeferencing error: computed position minus where the central ray
-    /// really met the echo range, m (zero without navigation errors).
-    pub error_m: DVec3,
-    /// 1-based number of this echo within its pulse.
-    pub return_number: u8,
-    /// Number of echoes of the pulse.
-    pub number_of_returns: u8,
-    /// LAS scan direction flag: true when the beam moves left to right.
-    pub scan_direction_positive: bool,
-    /// LAS edge-of-flight-line flag: last pulse before the mirror turns.
-    pub edge_of_flight_line: bool,
-    /// Scan angle, degrees, LAS convention (0 = vertical, positive to the
-    /// right of the flight direction), attitude included.
-    pub scan_angle_deg: f64,
-    /// ASPRS classification code.
-    pub classification: u8,
-    /// Flight line number (LAS point source ID).
-    pub point_source_id: u16,
-    /// Pulse index within the flight line.
-    pub pulse_index: u64,
-    /// Scene object that returned most of the echo's energy;
-    /// [`NO_OBJECT`] for receiver noise.
-    pub object_id: u32,
-    /// Angle between the beam axis and the normal of the surface that
-    /// returned most of the echo's energy (the normal where the first sub-ray
-    /// of that surface in the echo met it), degrees, 0–90; `None` for
-    /// echoes from foliage (no surface) and receiver noise (files write NaN).
-    pub incidence_angle_deg: Option<f64>,
-    /// Two-way travel time of the echo's peak since emission, ps (the
-    /// detector's fitted position on the receiver's time axis, before any
-    /// range noise).
-    pub echo_time_ps: f64,
-    /// What returned it: 0 a surface, 1 foliage, 2 a trunk (written to the
-    /// LAS user data byte).
-    pub component: u8,
-    /// The scanner channel that fired the pulse, 0–3 (LAS scanner
-    /// channel).
-    pub channel: u8,
-}
-
-/// The recorded waveforms of the pulses of one block that have echoes, in
-/// pulse order: what a full-waveform digitiser keeps of each pulse (the
-/// window of the record that holds signal).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct WaveformBlock {
-    /// One entry per pulse with at least one echo.
-    pub packets: Vec<WaveformPacket>,
-    /// The samples of all packets, one after the other, amplitude units.
-    pub samples: Vec<f32>,
-}
-
-/// Where one pulse's waveform lies in [`WaveformBlock::samples`].
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WaveformPacket {
-    /// Flight line number + 1 (the points' `point_source_id`).
-    pub point_source_id: u16,
-    /// Pulse index within the flight line (the points' `pulse_index`).
-    pub pulse_index: u64,
-    /// Two-way travel time of the first sample since emission, ps.
-    pub first_sample_ps: f64,
-    /// Index of the first sample in [`WaveformBlock::samples`].
-    pub start: usize,
-    /// Number of samples.
-    pub len: usize,
-}
-
-impl WaveformBlock {
-    /// Empties the block, keeping its allocations.
-    pub fn clear(&mut self) {
-        self.packets.clear();
-        self.samples.clear();
-    }
-
-    /// The samples of a packet.
-    pub fn samples_of(&self, packet: &WaveformPacket) -> &[f32] {
-        &self.samples[packet.start..packet.start + packet.len]
-    }
-}
-
-/// Receives the points of a survey in pulse order.
+/// Receives the points of a survey in pulse order (as ripgrep's searcher
+/// hands its matches to a `Sink`): its error is its own type, which the
+/// run reports as it is.
 pub trait PointSink: Send {
+    /// Why the sink could not take the points: [`WriteError`] for the file
+    /// writers, whose errors name their file.
+    type Error;
     /// Appends points.
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()>;
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), Self::Error>;
     /// Appends points together with the waveforms of their pulses (empty
     /// unless the simulator was asked to record waveforms). Sinks that do
     /// not store waveforms keep the default, which writes the points only.
-    fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
+    fn write_block(
+        &mut self,
+        points: &[PointRecord],
+        waveforms: &WaveformBlock,
+    ) -> Result<(), Self::Error> {
         let _ = waveforms;
         self.write(points)
     }
     /// Completes the output (headers, renaming).
-    fn finish(self: Box<Self>) -> io::Result<()>;
+    fn finish(self: Box<Self>) -> Result<(), Self::Error>;
     /// Completes the output for the points written so far but leaves it
     /// under its temporary name: the files of an interrupted run, which a
     /// resumed run continues. Sinks without files finish.
-    fn suspend(self: Box<Self>) -> io::Result<()> {
+    fn suspend(self: Box<Self>) -> Result<(), Self::Error> {
         self.finish()
     }
     /// Abandons the output, removing anything partial.
     fn discard(self: Box<Self>);
 }
+
+/// A sink of the file writers' kind, as a run holds its sinks.
+pub type FileSink = dyn PointSink<Error = WriteError>;
 
 /// Keeps all points in memory.
 #[derive(Debug, Default)]
@@ -166,11 +79,13 @@ pub struct MemorySink {
 }
 
 impl PointSink for MemorySink {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    /// Memory that is there never fails.
+    type Error = std::convert::Infallible;
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), Self::Error> {
         self.points.extend_from_slice(points);
         Ok(())
     }
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), Self::Error> {
         Ok(())
     }
     fn discard(self: Box<Self>) {}
@@ -374,7 +289,7 @@ impl AtomicFile {
     /// The partial file is created anew and exclusively: a file or a
     /// symbolic link already under that name is removed (the link, never
     /// what it points to), so that nothing outside the output is written.
-    pub fn create(target: &Path) -> io::Result<Self> {
+    pub fn create(target: &Path) -> Result<Self, WriteError> {
         remove_if_present(target)?;
         Self::create_beside(target)
     }
@@ -382,19 +297,14 @@ impl AtomicFile {
     /// [`AtomicFile::create`] that leaves a final file already at `target`
     /// until this one is committed over it: for a caller that removes that
     /// file itself, once it knows its run will go ahead.
-    pub fn create_beside(target: &Path) -> io::Result<Self> {
+    pub fn create_beside(target: &Path) -> Result<Self, WriteError> {
         let partial = Self::partial_of(target);
         remove_if_present(&partial)?;
         let file = std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
             .open(&partial)
-            .map_err(|e| {
-                io::Error::new(
-                    e.kind(),
-                    format!("cannot create '{}': {e}", partial.display()),
-                )
-            })?;
+            .at(&partial)?;
         Ok(Self {
             writer: Some(BufWriter::with_capacity(1 << 20, OutFile::new(file, 0))),
             partial,
@@ -409,29 +319,33 @@ impl AtomicFile {
     /// and opened for writing at its end. The file must be a regular file
     /// (a symbolic link is refused, not followed). Dropped uncommitted, the
     /// partial file is kept, so that the run can be resumed again.
-    pub fn reopen(target: &Path, len: u64) -> io::Result<Self> {
+    pub fn reopen(target: &Path, len: u64) -> Result<Self, WriteError> {
         let partial = Self::partial_of(target);
-        let named = |e: io::Error| file_error(&partial, e);
-        let meta = std::fs::symlink_metadata(&partial).map_err(named)?;
+        let refuse = |reason: String| {
+            WriteError::new(
+                &partial,
+                WriteCause::Mismatch {
+                    action: "continue",
+                    reason,
+                },
+            )
+        };
+        let meta = std::fs::symlink_metadata(&partial).at(&partial)?;
         if !meta.file_type().is_file() {
-            return Err(named(io::Error::new(
-                io::ErrorKind::InvalidData,
-                "not a regular file: an interrupted run leaves its files as regular files",
-            )));
+            return Err(refuse(
+                "it is not a regular file (an interrupted run leaves its files as regular files)"
+                    .into(),
+            ));
         }
         let have = meta.len();
         if have < len {
-            return Err(named(io::Error::new(
-                io::ErrorKind::InvalidData,
-                format!(
-                    "cannot continue this file: it has {have} bytes, fewer than the {len} \
-                     the interrupted run wrote"
-                ),
+            return Err(refuse(format!(
+                "it has {have} bytes, fewer than the {len} the interrupted run wrote"
             )));
         }
-        let mut file = open_no_follow(&partial).map_err(named)?;
-        file.set_len(len).map_err(named)?;
-        let end = file.seek(SeekFrom::End(0)).map_err(named)?;
+        let mut file = open_no_follow(&partial).at(&partial)?;
+        file.set_len(len).at(&partial)?;
+        let end = file.seek(SeekFrom::End(0)).at(&partial)?;
         Ok(Self {
             writer: Some(BufWriter::with_capacity(1 << 20, OutFile::new(file, end))),
             partial,
@@ -466,8 +380,8 @@ impl AtomicFile {
     }
 
     /// `e` as an error that names this file.
-    pub fn error(&self, e: io::Error) -> io::Error {
-        file_error(&self.target, e)
+    pub fn error(&self, e: io::Error) -> WriteError {
+        WriteError::io(&self.target, e)
     }
 
     /// The buffered writer.
@@ -515,22 +429,23 @@ impl AtomicFile {
     /// output of an interrupted run, complete for what it holds, which a
     /// resumed run continues ([`AtomicFile::reopen`]) and only a complete
     /// run renames. Errors name the file.
-    pub fn suspend(mut self) -> io::Result<()> {
+    pub fn suspend(mut self) -> Result<(), WriteError> {
         let partial = self.partial.clone();
         let w = self.writer.take().expect("writer present until commit");
         let file = w
             .into_inner()
-            .map_err(|e| file_error(&partial, e.into_error()))?
+            .map_err(|e| e.into_error())
+            .at(&partial)?
             .file;
-        file.sync_all().map_err(|e| file_error(&partial, e))?;
+        file.sync_all().at(&partial)?;
         self.committed = true;
         Ok(())
     }
 
     /// Flushes, syncs and renames to the final name. Errors name the file.
-    pub fn commit(mut self) -> io::Result<()> {
+    pub fn commit(mut self) -> Result<(), WriteError> {
         let target = self.target.clone();
-        let named = |e: io::Error| file_error(&target, e);
+        let named = |e: io::Error| WriteError::io(&target, e);
         let w = self.writer.take().expect("writer present until commit");
         let file = match w.into_inner() {
             Ok(f) => f.file,
@@ -555,33 +470,6 @@ impl AtomicFile {
     }
 }
 
-/// An I/O error on a named file (carried inside an [`io::Error`], so that
-/// whoever reports it can name the file: see [`file_error`]).
-#[derive(Debug, thiserror::Error)]
-#[error("{}: {source}", path.display())]
-pub struct FileError {
-    /// The file.
-    pub path: PathBuf,
-    /// What went wrong.
-    #[source]
-    pub source: io::Error,
-}
-
-/// Wraps `e` into an [`io::Error`] of the same kind holding a [`FileError`]
-/// for `path` (an error that already names a file is returned unchanged).
-pub fn file_error(path: &Path, e: io::Error) -> io::Error {
-    if e.get_ref().is_some_and(|i| i.is::<FileError>()) {
-        return e;
-    }
-    io::Error::new(
-        e.kind(),
-        FileError {
-            path: path.to_path_buf(),
-            source: e,
-        },
-    )
-}
-
 impl Drop for AtomicFile {
     fn drop(&mut self) {
         if !self.committed && !self.keep_on_drop {
@@ -593,9 +481,9 @@ impl Drop for AtomicFile {
 
 /// Removes the file or symbolic link `path` (never what a link points
 /// to); a missing one is fine.
-fn remove_if_present(path: &Path) -> io::Result<()> {
+fn remove_if_present(path: &Path) -> Result<(), WriteError> {
     match std::fs::remove_file(path) {
-        Err(e) if e.kind() != io::ErrorKind::NotFound => Err(file_error(path, e)),
+        Err(e) if e.kind() != io::ErrorKind::NotFound => Err(WriteError::io(path, e)),
         _ => Ok(()),
     }
 }
@@ -614,9 +502,9 @@ fn open_no_follow(path: &Path) -> io::Result<File> {
 }
 
 /// Writes a whole small file atomically.
-pub fn write_atomic(target: &Path, bytes: &[u8]) -> io::Result<()> {
+pub fn write_atomic(target: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     let mut f = AtomicFile::create(target)?;
-    f.writer().write_all(bytes)?;
+    f.writer().write_all(bytes).at(target)?;
     f.commit()
 }
 

@@ -7,6 +7,8 @@
 use std::io::{self, Read};
 use std::path::Path;
 
+use super::{AtFile, WriteCause, WriteError};
+
 /// How a file shows that lidarsim wrote it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mark {
@@ -30,28 +32,28 @@ const MARK_BYTES: u64 = 4096;
 /// there that lidarsim did not write (without that mark, or not a regular
 /// file); a missing file, or one with the mark, may be written. The error
 /// does not name the path: the caller does.
-pub fn check_replaceable(path: &Path, mark: Mark) -> io::Result<()> {
+pub fn check_replaceable(path: &Path, mark: Mark) -> Result<(), WriteError> {
     let meta = match std::fs::symlink_metadata(path) {
         Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(e),
+        Err(e) => return Err(WriteError::io(path, e)),
         Ok(m) => m,
     };
     let refused = |what: &str| {
-        Err(io::Error::new(
-            io::ErrorKind::AlreadyExists,
-            format!(
+        Err(WriteError::new(
+            path,
+            WriteCause::Refused(format!(
                 "a file is there and {what}: lidarsim writes only where nothing is or over a \
                  file it wrote itself; choose another name, or move that file away"
-            ),
+            )),
         ))
     };
     if !meta.is_file() {
         return refused("is not a regular file");
     }
     let mut head = Vec::new();
-    std::fs::File::open(path)?
-        .take(MARK_BYTES)
-        .read_to_end(&mut head)?;
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MARK_BYTES).read_to_end(&mut head))
+        .at(path)?;
     let ours = match mark {
         Mark::Png => {
             head.starts_with(b"\x89PNG\r\n\x1a\n")

@@ -10,10 +10,13 @@
 //! (26 bytes each: point source id, pulse index, first-sample time and
 //! sample count) and the samples (`f32`).
 
-use std::io::{self, BufReader, Read, Write};
+use std::io::{BufReader, Read, Write};
 use std::path::Path;
 
-use super::{AtomicFile, PointRecord, PointSink, WaveformBlock, WaveformPacket};
+use super::{
+    AtFile, AtomicFile, Component, NO_OBJECT, PointRecord, PointSink, WaveformBlock,
+    WaveformPacket, WriteCause, WriteError,
+};
 use crate::geometry::DVec3;
 
 /// The first bytes of a part's point file.
@@ -34,7 +37,7 @@ pub struct PartWriter {
 
 impl PartWriter {
     /// Creates `path` (as `path.partial` until finished).
-    pub fn create(path: &Path) -> io::Result<Self> {
+    pub fn create(path: &Path) -> Result<Self, WriteError> {
         let mut file = AtomicFile::create(path)?;
         file.writer().write_all(MAGIC).map_err(|e| file.error(e))?;
         Ok(Self {
@@ -45,15 +48,27 @@ impl PartWriter {
 }
 
 impl PointSink for PartWriter {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    type Error = WriteError;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteError> {
         self.write_block(points, &WaveformBlock::default())
     }
 
-    fn write_block(&mut self, points: &[PointRecord], waves: &WaveformBlock) -> io::Result<()> {
+    fn write_block(
+        &mut self,
+        points: &[PointRecord],
+        waves: &WaveformBlock,
+    ) -> Result<(), WriteError> {
         let b = &mut self.buf;
         b.clear();
+        let path = self.file.path();
         let count = |n: usize| {
-            u32::try_from(n).map_err(|_| io::Error::other("a block of more than 2^32 points"))
+            u32::try_from(n).map_err(|_| {
+                WriteError::new(
+                    path,
+                    WriteCause::Unsupported("a block of more than 2^32 points".into()),
+                )
+            })
         };
         b.extend_from_slice(&count(points.len())?.to_le_bytes());
         b.extend_from_slice(&count(waves.packets.len())?.to_le_bytes());
@@ -77,11 +92,11 @@ impl PointSink for PartWriter {
             .map_err(|e| self.file.error(e))
     }
 
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), WriteError> {
         self.file.commit()
     }
 
-    fn suspend(self: Box<Self>) -> io::Result<()> {
+    fn suspend(self: Box<Self>) -> Result<(), WriteError> {
         self.file.suspend()
     }
 
@@ -109,9 +124,9 @@ pub(crate) fn encode(p: &PointRecord, b: &mut Vec<u8>) {
     b.push(p.classification);
     b.extend_from_slice(&p.point_source_id.to_le_bytes());
     b.extend_from_slice(&p.pulse_index.to_le_bytes());
-    b.extend_from_slice(&p.object_id.to_le_bytes());
+    b.extend_from_slice(&p.object_code().to_le_bytes());
     f64s(b, &[p.incidence_angle_deg.unwrap_or(0.0), p.echo_time_ps]);
-    b.extend_from_slice(&[p.component, p.channel]);
+    b.extend_from_slice(&[p.component.code(), p.channel]);
 }
 
 /// Reads a little-endian value from the front of a slice.
@@ -157,9 +172,11 @@ pub(crate) fn decode(bytes: &[u8]) -> PointRecord {
     let classification = c.u8();
     let point_source_id = c.u16();
     let pulse_index = c.u64();
-    let object_id = c.u32();
+    let object_id = Some(c.u32()).filter(|&id| id != NO_OBJECT);
     let (incidence, echo_time_ps) = (c.f64(), c.f64());
-    let (component, channel) = (c.u8(), c.u8());
+    // A part's records are checked against the CRC its run recorded
+    // before they are read: a code is one `encode` wrote.
+    let (component, channel) = (Component::from_code(c.u8()).unwrap_or_default(), c.u8());
     PointRecord {
         position_m,
         gps_time_s,
@@ -194,16 +211,16 @@ pub struct PartReader {
 
 impl PartReader {
     /// Opens `path`, checking its magic bytes.
-    pub fn open(path: &Path) -> io::Result<Self> {
-        let named = |e: io::Error| super::file_error(path, e);
-        let mut file = BufReader::with_capacity(1 << 20, std::fs::File::open(path).map_err(named)?);
+    pub fn open(path: &Path) -> Result<Self, WriteError> {
+        let mut file = BufReader::with_capacity(1 << 20, std::fs::File::open(path).at(path)?);
         let mut magic = [0u8; 8];
-        file.read_exact(&mut magic).map_err(named)?;
+        file.read_exact(&mut magic).at(path)?;
         if &magic != MAGIC {
-            return Err(named(io::Error::new(
-                io::ErrorKind::InvalidData,
-                "not the point file of a lidarsim part",
-            )));
+            return Err(WriteError::mismatch(
+                path,
+                "join",
+                "it is not the point file of a lidarsim part",
+            ));
         }
         Ok(Self {
             file,
@@ -218,20 +235,20 @@ impl PartReader {
         &mut self,
         points: &mut Vec<PointRecord>,
         waves: &mut WaveformBlock,
-    ) -> io::Result<bool> {
+    ) -> Result<bool, WriteError> {
         points.clear();
         waves.clear();
-        let named = |e: io::Error| super::file_error(&self.path, e);
+        let path = &self.path;
         let mut head = [0u8; 16];
-        match self.file.read(&mut head[..1]).map_err(named)? {
+        match self.file.read(&mut head[..1]).at(path)? {
             0 => return Ok(false),
-            _ => self.file.read_exact(&mut head[1..]).map_err(named)?,
+            _ => self.file.read_exact(&mut head[1..]).at(path)?,
         }
         let mut c = Cursor(&head);
         let (n, m, samples) = (c.u32() as usize, c.u32() as usize, c.u64() as usize);
         let len = n * RECORD_BYTES + m * PACKET_BYTES + samples * 4;
         self.buf.resize(len, 0);
-        self.file.read_exact(&mut self.buf).map_err(named)?;
+        self.file.read_exact(&mut self.buf).at(path)?;
         let (records, rest) = self.buf.split_at(n * RECORD_BYTES);
         points.extend(records.chunks_exact(RECORD_BYTES).map(decode));
         let (packets, samples) = rest.split_at(m * PACKET_BYTES);
@@ -283,10 +300,10 @@ mod tests {
             classification: 5,
             point_source_id: 7,
             pulse_index: u64::MAX - 1,
-            object_id: 4_000_000_000,
+            object_id: Some(4_000_000_000),
             incidence_angle_deg: None,
             echo_time_ps: 3.3e6,
-            component: 1,
+            component: Component::Foliage,
             channel: 2,
         };
         let q = PointRecord {

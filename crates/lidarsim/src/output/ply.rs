@@ -11,7 +11,7 @@
 use std::io::{self, Seek, SeekFrom, Write};
 use std::path::Path;
 
-use super::{AtomicFile, PointRecord, PointSink};
+use super::{AtFile, AtomicFile, PointRecord, PointSink, WriteCause, WriteError};
 
 /// The vertex properties in record order: (PLY type, name).
 pub const PLY_PROPERTIES: [(&str, &str); 16] = [
@@ -51,9 +51,9 @@ pub struct PlyWriter {
 impl PlyWriter {
     /// Creates `path` (as `path.partial` until finished); `origin_m` is
     /// added to every position.
-    pub fn create(path: &Path, origin_m: [f64; 3]) -> io::Result<Self> {
+    pub fn create(path: &Path, origin_m: [f64; 3]) -> Result<Self, WriteError> {
         let mut file = AtomicFile::create(path)?;
-        file.writer().write_all(&header(0))?;
+        file.writer().write_all(&header(0)).at(path)?;
         Ok(Self {
             file,
             origin_m,
@@ -72,14 +72,14 @@ impl PlyWriter {
     /// Continues `path`, which an interrupted run finished early when it
     /// held `len` bytes: its header must be this writer's header for the
     /// vertices those bytes hold, and vertices are appended after them.
-    pub fn resume(path: &Path, len: u64, origin_m: [f64; 3]) -> io::Result<Self> {
-        let bad = |what: String| {
-            super::file_error(
+    pub fn resume(path: &Path, len: u64, origin_m: [f64; 3]) -> Result<Self, WriteError> {
+        let bad = |reason: String| {
+            WriteError::new(
                 path,
-                io::Error::new(
-                    io::ErrorKind::InvalidData,
-                    format!("cannot continue this file: {what}"),
-                ),
+                WriteCause::Mismatch {
+                    action: "continue",
+                    reason,
+                },
             )
         };
         let header_len = header(0).len() as u64;
@@ -94,9 +94,13 @@ impl PlyWriter {
         let mut head = vec![0u8; header_len as usize];
         {
             let w = file.writer().get_mut();
-            w.seek(SeekFrom::Start(0))?;
-            io::Read::read_exact(w.file_mut(), &mut head)?;
-            w.seek(SeekFrom::End(0))?;
+            let mut read = || -> io::Result<()> {
+                w.seek(SeekFrom::Start(0))?;
+                io::Read::read_exact(w.file_mut(), &mut head)?;
+                w.seek(SeekFrom::End(0))?;
+                Ok(())
+            };
+            read().at(path)?;
         }
         if head != header(count) {
             return Err(bad(format!(
@@ -112,14 +116,17 @@ impl PlyWriter {
     }
 
     /// Writes the header for the vertices written so far.
-    fn write_header(&mut self) -> io::Result<()> {
+    fn write_header(&mut self) -> Result<(), WriteError> {
         let h = header(self.count);
         let w = self.file.writer();
-        w.flush()?;
-        w.seek(SeekFrom::Start(0))?;
-        w.write_all(&h)?;
-        w.seek(SeekFrom::End(0))?;
-        Ok(())
+        let mut write = || -> io::Result<()> {
+            w.flush()?;
+            w.seek(SeekFrom::Start(0))?;
+            w.write_all(&h)?;
+            w.seek(SeekFrom::End(0))?;
+            Ok(())
+        };
+        write().at(self.file.path())
     }
 }
 
@@ -141,7 +148,9 @@ fn header(count: u64) -> Vec<u8> {
 }
 
 impl PointSink for PlyWriter {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    type Error = WriteError;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteError> {
         self.buf.clear();
         let o = self.origin_m;
         for p in points {
@@ -158,7 +167,7 @@ impl PointSink for PlyWriter {
                 p.return_number,
                 p.number_of_returns,
                 p.classification,
-                p.component,
+                p.component.code(),
             ]);
             self.buf.extend_from_slice(&p.point_source_id.to_le_bytes());
             for v in [
@@ -170,18 +179,19 @@ impl PointSink for PlyWriter {
             ] {
                 self.buf.extend_from_slice(&(v as f32).to_le_bytes());
             }
-            self.buf.extend_from_slice(&p.object_id.to_le_bytes());
+            self.buf.extend_from_slice(&p.object_code().to_le_bytes());
             self.count += 1;
         }
-        self.file.writer().write_all(&self.buf)
+        let path = self.file.path().to_path_buf();
+        self.file.writer().write_all(&self.buf).at(&path)
     }
 
-    fn finish(mut self: Box<Self>) -> io::Result<()> {
+    fn finish(mut self: Box<Self>) -> Result<(), WriteError> {
         self.write_header()?;
         self.file.commit()
     }
 
-    fn suspend(mut self: Box<Self>) -> io::Result<()> {
+    fn suspend(mut self: Box<Self>) -> Result<(), WriteError> {
         self.write_header()?;
         self.file.suspend()
     }

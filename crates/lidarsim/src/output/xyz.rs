@@ -1,11 +1,11 @@
 //! Plain-text point output: one point per line, space separated, with a
 //! header line naming the columns.
 
-use std::io::{self, Write};
+use std::io::Write;
 use std::path::Path;
 
 use super::text::{push_fixed, push_u64};
-use super::{AtomicFile, PointRecord, PointSink};
+use super::{AtomicFile, PointRecord, PointSink, WriteError};
 
 /// The column names of the header line, in order.
 pub const XYZ_COLUMNS: &str = "x y z intensity return_number number_of_returns classification \
@@ -24,7 +24,7 @@ pub struct XyzWriter {
 impl XyzWriter {
     /// Creates `path` (as `path.partial` until finished) and writes the
     /// header line; `origin_m` is added to every position.
-    pub fn create(path: &Path, origin_m: [f64; 3]) -> io::Result<Self> {
+    pub fn create(path: &Path, origin_m: [f64; 3]) -> Result<Self, WriteError> {
         let mut file = AtomicFile::create(path)?;
         writeln!(file.writer(), "{XYZ_COLUMNS}").map_err(|e| file.error(e))?;
         Ok(Self {
@@ -36,7 +36,7 @@ impl XyzWriter {
 
     /// Continues `path`, finished early by an interrupted run when it held
     /// `len` bytes: points are appended after them.
-    pub fn resume(path: &Path, len: u64, origin_m: [f64; 3]) -> io::Result<Self> {
+    pub fn resume(path: &Path, len: u64, origin_m: [f64; 3]) -> Result<Self, WriteError> {
         Ok(Self {
             file: AtomicFile::reopen(path, len)?,
             origin_m,
@@ -46,7 +46,9 @@ impl XyzWriter {
 }
 
 impl PointSink for XyzWriter {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    type Error = WriteError;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteError> {
         let o = self.origin_m;
         // The columns after the first, each after a space.
         let fixed = |b: &mut Vec<u8>, v: f64, decimals: u32| {
@@ -74,7 +76,7 @@ impl PointSink for XyzWriter {
             fixed(b, p.amplitude, 6);
             fixed(b, p.echo_width_ns, 3);
             fixed(b, p.range_m, 4);
-            integer(b, u64::from(p.component));
+            integer(b, u64::from(p.component.code()));
             b.push(b'\n');
         }
         if let Err(e) = self.file.writer().write_all(&self.block) {
@@ -83,11 +85,11 @@ impl PointSink for XyzWriter {
         Ok(())
     }
 
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), WriteError> {
         self.file.commit()
     }
 
-    fn suspend(self: Box<Self>) -> io::Result<()> {
+    fn suspend(self: Box<Self>) -> Result<(), WriteError> {
         self.file.suspend()
     }
 

@@ -1,8 +1,9 @@
 //! The RGB raster every picture is drawn on: pixels, filled rectangles,
 //! straight lines, the page and ink colours, and PNG encoding.
 
-use std::io;
 use std::path::Path;
+
+use crate::output::{WriteCause, WriteError};
 
 /// An RGB raster.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -54,7 +55,7 @@ impl Image {
     }
 
     /// The image as an 8-bit RGB PNG.
-    pub fn to_png(&self) -> io::Result<Vec<u8>> {
+    pub fn to_png(&self) -> Result<Vec<u8>, png::EncodingError> {
         let mut bytes = Vec::new();
         let mut enc = png::Encoder::new(&mut bytes, self.width as u32, self.height as u32);
         enc.set_color(png::ColorType::Rgb);
@@ -64,20 +65,22 @@ impl Image {
         enc.add_text_chunk(
             "Software".to_string(),
             crate::output::own::PNG_SOFTWARE.to_string(),
-        )
-        .map_err(io::Error::other)?;
-        let mut w = enc.write_header().map_err(io::Error::other)?;
-        w.write_image_data(&self.rgb).map_err(io::Error::other)?;
-        w.finish().map_err(io::Error::other)?;
+        )?;
+        let mut w = enc.write_header()?;
+        w.write_image_data(&self.rgb)?;
+        w.finish()?;
         Ok(bytes)
     }
 
     /// Saves as an 8-bit RGB PNG (written whole, then renamed into place),
     /// where no file is or over a picture lidarsim wrote
     /// ([`crate::output::own`]).
-    pub fn save_png(&self, path: &Path) -> io::Result<()> {
+    pub fn save_png(&self, path: &Path) -> Result<(), WriteError> {
         crate::output::own::check_replaceable(path, crate::output::own::Mark::Png)?;
-        crate::output::write_atomic(path, &self.to_png()?)
+        let png = self
+            .to_png()
+            .map_err(|e| WriteError::new(path, WriteCause::Unsupported(e.to_string())))?;
+        crate::output::write_atomic(path, &png)
     }
 }
 

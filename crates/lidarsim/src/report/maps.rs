@@ -196,8 +196,8 @@ mod tests {
                     classification: 2,
                     point_source_id: 1,
                     pulse_index: 0,
-                    object_id: 0,
-                    component: 0,
+                    object_id: None,
+                    component: Default::default(),
                     channel: 0,
                     incidence_angle_deg: Some(0.0),
                     echo_time_ps: 0.0,
@@ -209,7 +209,7 @@ mod tests {
         // The median cell holds the planned density (edge cells are cut).
         assert!((mean - 8.0).abs() < 0.02 * 8.0, "{mean}");
         assert_eq!(sink.returns_per_pulse[1], pts.len() as u64);
-        assert_eq!(sink.single_pulse, Some((0, 0)));
+        assert_eq!(sink.single_pulse.map(|s| (s.line, s.pulse)), Some((0, 0)));
     }
 
     #[test]

@@ -2,7 +2,6 @@
 //! PNG.
 
 use std::fmt::Write as _;
-use std::io;
 
 use crate::render::Image;
 
@@ -25,7 +24,7 @@ pub fn base64(bytes: &[u8]) -> String {
 }
 
 /// An `<img>` tag showing `img`, embedded as a base64 PNG.
-pub(super) fn img_tag(img: &Image, alt: &str) -> io::Result<String> {
+pub(super) fn img_tag(img: &Image, alt: &str) -> Result<String, png::EncodingError> {
     Ok(format!(
         "<img alt=\"{alt}\" src=\"data:image/png;base64,{}\">",
         base64(&img.to_png()?)

@@ -35,4 +35,5 @@ pub use flight::{attitude_plot, trajectory_error_plots};
 pub use markup::base64;
 pub use page::html;
 pub use pattern::{pattern_points, scan_pattern_plot};
-pub use sink::ReportSink;
+pub use sink::{ReportSink, SamplePulse};
+pub use state::StateError;

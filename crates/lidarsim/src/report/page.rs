@@ -3,7 +3,6 @@
 //! with the georeferencing errors, and the sample waveforms.
 
 use std::fmt::Write as _;
-use std::io;
 
 use super::markup::{esc, img_tag, table_rows};
 use super::{ReportSink, attitude_plot, trajectory_error_plots};
@@ -40,7 +39,7 @@ pub fn html(
     summary: &Summary,
     sink: &ReportSink,
     waveforms: &[(String, WaveformPlot)],
-) -> io::Result<String> {
+) -> Result<String, png::EncodingError> {
     let mut h = String::new();
     head(&mut h);
     survey_section(&mut h, survey, lines, summary);
@@ -62,7 +61,7 @@ fn pattern_section(
     survey: &Survey,
     lines: &[FlightLine],
     summary: &Summary,
-) -> io::Result<()> {
+) -> Result<(), png::EncodingError> {
     let (Some(line), Some(plan)) = (lines.first(), summary.plan.lines.first()) else {
         return Ok(());
     };
@@ -169,7 +168,7 @@ fn summary_section(h: &mut String, summary: &Summary) {
 }
 
 /// The top views by height, intensity and class, with their ranges.
-fn top_views_section(h: &mut String, sink: &ReportSink) -> io::Result<()> {
+fn top_views_section(h: &mut String, sink: &ReportSink) -> Result<(), png::EncodingError> {
     let (heights, intensities) = (
         sink.height_palette().range(),
         sink.intensity_palette().range(),
@@ -194,7 +193,7 @@ fn top_views_section(h: &mut String, sink: &ReportSink) -> io::Result<()> {
 }
 
 /// The cross-section and the heights it spans.
-fn cross_section(h: &mut String, sink: &ReportSink) -> io::Result<()> {
+fn cross_section(h: &mut String, sink: &ReportSink) -> Result<(), png::EncodingError> {
     let span = match sink.profile_heights() {
         Some((lo, hi)) => format!(
             " Its points lie from {} m to {} m; heights are stretched to fill the picture (the \
@@ -234,7 +233,11 @@ fn returns_section(h: &mut String, sink: &ReportSink) {
 }
 
 /// The point density against the planned one.
-fn density_section(h: &mut String, summary: &Summary, sink: &ReportSink) -> io::Result<()> {
+fn density_section(
+    h: &mut String,
+    summary: &Summary,
+    sink: &ReportSink,
+) -> Result<(), png::EncodingError> {
     let (density, mean) = sink.density_map(summary.point_density_per_m2);
     let _ = write!(
         h,
@@ -249,7 +252,10 @@ fn density_section(h: &mut String, summary: &Summary, sink: &ReportSink) -> io::
 }
 
 /// The sample waveforms, if any.
-fn waveforms_section(h: &mut String, waveforms: &[(String, WaveformPlot)]) -> io::Result<()> {
+fn waveforms_section(
+    h: &mut String,
+    waveforms: &[(String, WaveformPlot)],
+) -> Result<(), png::EncodingError> {
     if !waveforms.is_empty() {
         let _ = write!(h, "<h2>Sample waveforms</h2>");
         for (title, plot) in waveforms {
@@ -271,7 +277,7 @@ fn flight_section(
     survey: &Survey,
     lines: &[FlightLine],
     sink: &ReportSink,
-) -> io::Result<()> {
+) -> Result<(), png::EncodingError> {
     if lines.is_empty() {
         return Ok(());
     }
@@ -375,7 +381,8 @@ vertices_m = [[-300, -300, -0.04], [300, -300, -0.04], [300, 300, -0.04], [-300,
         let dir = std::env::temp_dir().join(format!("lidarsim-report-page-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let progress = |_| {};
-        crate::run::run_to_dir(&survey, &dir, &crate::run::RunOptions::new(1, &progress)).unwrap();
+        let flight = crate::Flight::build(survey).unwrap();
+        crate::run::run(&flight, &dir, &crate::run::RunOptions::new(1, &progress)).unwrap();
         let page = std::fs::read_to_string(dir.join("report.html")).unwrap();
         std::fs::remove_dir_all(&dir).ok();
         for words in [

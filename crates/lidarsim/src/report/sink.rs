@@ -3,11 +3,10 @@
 //! cross-section band, two sample pulses and the error statistics, on a
 //! grid bounded in pixels whatever the area or the length of the flight.
 
-use std::io;
-
 use super::ErrorStats;
+use super::state::StateError;
 use crate::geometry::Aabb;
-use crate::output::{PointRecord, PointSink};
+use crate::output::{PointRecord, PointSink, WriteError};
 use crate::render::RenderPoint;
 
 /// Largest number of pixels of the report's maps.
@@ -43,13 +42,23 @@ pub struct ReportSink {
     /// The points in that band (at most [`MAX_PROFILE_POINTS`]).
     pub(super) profile: Vec<RenderPoint>,
     /// A pulse with the most returns seen, if one had two or more (so that
-    /// it is never the single-return pulse): (line index, pulse index,
-    /// returns).
-    pub richest_pulse: Option<(u32, u64, u8)>,
+    /// it is never the single-return pulse).
+    pub richest_pulse: Option<SamplePulse>,
     /// A pulse with a single return.
-    pub single_pulse: Option<(u32, u64)>,
+    pub single_pulse: Option<SamplePulse>,
     /// Georeferencing errors of all points.
     pub errors: ErrorStats,
+}
+
+/// A pulse the report draws the waveform of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SamplePulse {
+    /// Index of its flight line (0 = first).
+    pub line: u32,
+    /// Its index within the line.
+    pub pulse: u64,
+    /// Its number of returns.
+    pub returns: u8,
 }
 
 impl ReportSink {
@@ -128,15 +137,12 @@ impl ReportSink {
     /// pixels, histogram, cross-section and sample pulses, and the error
     /// statistics up to the order of their sums. Refused when `later`
     /// covers another grid.
-    pub fn absorb(&mut self, later: &ReportSink) -> io::Result<()> {
+    pub fn absorb(&mut self, later: &ReportSink) -> Result<(), StateError> {
         if (later.width, later.height) != (self.width, self.height)
             || [later.x0, later.y0, later.resolution_m, later.profile_y]
                 != [self.x0, self.y0, self.resolution_m, self.profile_y]
         {
-            return Err(io::Error::new(
-                io::ErrorKind::InvalidData,
-                "bad report state: it was made for another area",
-            ));
+            return Err(StateError::OtherArea);
         }
         for k in 0..self.count.len() {
             self.count[k] += later.count[k];
@@ -158,7 +164,7 @@ impl ReportSink {
         self.profile
             .extend(later.profile.iter().take(room).cloned());
         if let Some(r) = later.richest_pulse
-            && self.richest_pulse.is_none_or(|s| r.2 > s.2)
+            && self.richest_pulse.is_none_or(|s| r.returns > s.returns)
         {
             self.richest_pulse = Some(r);
         }
@@ -169,7 +175,10 @@ impl ReportSink {
 }
 
 impl PointSink for ReportSink {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    /// The report gathers in memory, beside the sinks that write files.
+    type Error = WriteError;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteError> {
         for p in points {
             let (x, y, z) = (p.position_m.x, p.position_m.y, p.position_m.z);
             if let Some(k) = self.pixel(x, y) {
@@ -184,13 +193,20 @@ impl PointSink for ReportSink {
             if p.return_number == 1 {
                 self.returns_per_pulse[usize::from(p.number_of_returns.min(15))] += 1;
                 let line = u32::from(p.point_source_id).saturating_sub(1);
+                let sample = SamplePulse {
+                    line,
+                    pulse: p.pulse_index,
+                    returns: p.number_of_returns,
+                };
                 if p.number_of_returns > 1
-                    && self.richest_pulse.is_none_or(|r| p.number_of_returns > r.2)
+                    && self
+                        .richest_pulse
+                        .is_none_or(|r| p.number_of_returns > r.returns)
                 {
-                    self.richest_pulse = Some((line, p.pulse_index, p.number_of_returns));
+                    self.richest_pulse = Some(sample);
                 }
                 if p.number_of_returns == 1 && self.single_pulse.is_none() {
-                    self.single_pulse = Some((line, p.pulse_index));
+                    self.single_pulse = Some(sample);
                 }
             }
             if (y - self.profile_y).abs() <= 1.0 && self.profile.len() < MAX_PROFILE_POINTS {
@@ -210,7 +226,7 @@ impl PointSink for ReportSink {
         Ok(())
     }
 
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), WriteError> {
         Ok(())
     }
 
@@ -221,8 +237,8 @@ impl PointSink for ReportSink {
 mod tests {
     use crate::geometry::DVec3;
     use crate::output::{PointRecord, PointSink};
-    use crate::report::ReportSink;
     use crate::report::testing::{area, rec};
+    use crate::report::{ReportSink, SamplePulse};
 
     #[test]
     fn the_two_sample_pulses_are_different_pulses() {
@@ -232,15 +248,23 @@ mod tests {
             .map(|k| rec((1.0, 1.0, 0.0), DVec3::ZERO, (1, 1), (0, k)))
             .collect();
         sink.write(&single).unwrap();
-        assert_eq!(sink.single_pulse, Some((0, 0)));
+        assert_eq!(sink.single_pulse, Some(sample(0, 0, 1)));
         assert_eq!(sink.richest_pulse, None);
         // A pulse with three returns on the second line.
         let three: Vec<PointRecord> = (1..=3)
             .map(|n| rec((2.0, 2.0, 3.0 - f64::from(n)), DVec3::ZERO, (n, 3), (1, 7)))
             .collect();
         sink.write(&three).unwrap();
-        assert_eq!(sink.richest_pulse, Some((1, 7, 3)));
-        assert_eq!(sink.single_pulse, Some((0, 0)));
+        assert_eq!(sink.richest_pulse, Some(sample(1, 7, 3)));
+        assert_eq!(sink.single_pulse, Some(sample(0, 0, 1)));
+    }
+
+    fn sample(line: u32, pulse: u64, returns: u8) -> SamplePulse {
+        SamplePulse {
+            line,
+            pulse,
+            returns,
+        }
     }
 
     /// Points with ties in height, several pulses of one to four returns,

@@ -1,10 +1,9 @@
 //! `report.state`: everything a [`ReportSink`] has gathered, saved when a
 //! run stops early and restored when it resumes.
 
-use std::io;
-
 use super::ReportSink;
 use super::sink::MAX_PROFILE_POINTS;
+use super::sink::SamplePulse;
 use crate::render::RenderPoint;
 
 /// First bytes of a saved [`ReportSink`] state (format version 3: the
@@ -26,7 +25,7 @@ impl ReportSink {
     /// the grid, the pixels that hold points in runs, the histogram, the
     /// cross-section points, the two sample pulses and the error
     /// statistics).
-    pub fn save(&self, w: &mut dyn io::Write) -> io::Result<()> {
+    pub fn save(&self) -> Vec<u8> {
         let n = self.count.len();
         let touched = (0..n).filter(|&k| !self.untouched(k)).count();
         let mut b = Vec::with_capacity(touched * (PIXEL_BYTES + 8) + self.profile.len() * 32 + 256);
@@ -68,7 +67,7 @@ impl ReportSink {
             b.extend_from_slice(&p.source.to_le_bytes());
         }
         let (flag, (line, pulse, n)) = match self.richest_pulse {
-            Some(r) => (1u8, r),
+            Some(r) => (1u8, (r.line, r.pulse, r.returns)),
             None => (0, (0, 0, 0)),
         };
         b.push(flag);
@@ -76,7 +75,7 @@ impl ReportSink {
         b.extend_from_slice(&pulse.to_le_bytes());
         b.push(n);
         let (flag, (line, pulse)) = match self.single_pulse {
-            Some(r) => (1u8, r),
+            Some(r) => (1u8, (r.line, r.pulse)),
             None => (0, (0, 0)),
         };
         b.push(flag);
@@ -90,24 +89,24 @@ impl ReportSink {
         for v in [e.max_horizontal_m, e.max_vertical_m] {
             b.extend_from_slice(&v.to_le_bytes());
         }
-        w.write_all(&b)
+        b
     }
 
     /// Continues from a state written by [`ReportSink::save`]; `self` must be
     /// a new sink over the same area (the grid is compared).
-    pub fn restore(&mut self, bytes: &[u8]) -> io::Result<()> {
+    pub fn restore(&mut self, bytes: &[u8]) -> Result<(), StateError> {
         let mut r = StateReader { bytes, at: 0 };
         let runs = match r.take(8)? {
             m if m == STATE_MAGIC => true,
             m if m == STATE_MAGIC_V2 => false,
-            _ => return Err(state_error("not a report state")),
+            _ => return Err(StateError::NotAState),
         };
         let (w, h) = (r.u64()?, r.u64()?);
         let grid = [r.f64()?, r.f64()?, r.f64()?, r.f64()?];
         if (w, h) != (self.width as u64, self.height as u64)
             || grid != [self.x0, self.y0, self.resolution_m, self.profile_y]
         {
-            return Err(state_error("it was made for another area"));
+            return Err(StateError::OtherArea);
         }
         let n = self.count.len();
         let mut k = 0;
@@ -122,7 +121,7 @@ impl ReportSink {
             let end = first
                 .checked_add(touched)
                 .filter(|&e| e <= n && (untouched, touched) != (0, 0))
-                .ok_or_else(|| state_error("its pixel runs do not cover the grid"))?;
+                .ok_or(StateError::Runs)?;
             for j in k..first {
                 self.clear_pixel(j);
             }
@@ -139,7 +138,7 @@ impl ReportSink {
         }
         let n = r.u64()?;
         if n > MAX_PROFILE_POINTS as u64 {
-            return Err(state_error("too many cross-section points"));
+            return Err(StateError::Profile);
         }
         self.profile.clear();
         for _ in 0..n {
@@ -156,9 +155,17 @@ impl ReportSink {
             });
         }
         let (flag, line, pulse, n) = (r.u8()?, r.u32()?, r.u64()?, r.u8()?);
-        self.richest_pulse = (flag == 1).then_some((line, pulse, n));
+        self.richest_pulse = (flag == 1).then_some(SamplePulse {
+            line,
+            pulse,
+            returns: n,
+        });
         let (flag, line, pulse) = (r.u8()?, r.u32()?, r.u64()?);
-        self.single_pulse = (flag == 1).then_some((line, pulse));
+        self.single_pulse = (flag == 1).then_some(SamplePulse {
+            line,
+            pulse,
+            returns: 1,
+        });
         self.errors.count = r.u64()?;
         for v in self.errors.sum_m.iter_mut() {
             *v = r.f64()?;
@@ -169,7 +176,7 @@ impl ReportSink {
         self.errors.max_horizontal_m = r.f64()?;
         self.errors.max_vertical_m = r.f64()?;
         if r.at != bytes.len() {
-            return Err(state_error("trailing bytes"));
+            return Err(StateError::Trailing);
         }
         Ok(())
     }
@@ -199,11 +206,27 @@ fn run_len(n: usize) -> u32 {
     u32::try_from(n).expect("a report grid has fewer than 2^32 pixels")
 }
 
-fn state_error(what: &str) -> io::Error {
-    io::Error::new(
-        io::ErrorKind::InvalidData,
-        format!("bad report state: {what}"),
-    )
+/// Why a saved state cannot be restored.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum StateError {
+    /// Its first bytes are not a state's.
+    #[error("bad report state: not a report state")]
+    NotAState,
+    /// Its grid is not the sink's.
+    #[error("bad report state: it was made for another area")]
+    OtherArea,
+    /// Its pixel runs do not add up to the grid.
+    #[error("bad report state: its pixel runs do not cover the grid")]
+    Runs,
+    /// It holds more cross-section points than a sink keeps.
+    #[error("bad report state: too many cross-section points")]
+    Profile,
+    /// Bytes follow its end.
+    #[error("bad report state: trailing bytes")]
+    Trailing,
+    /// It ends early.
+    #[error("bad report state: truncated")]
+    Truncated,
 }
 
 /// Little-endian reader over a saved state.
@@ -213,34 +236,34 @@ struct StateReader<'a> {
 }
 
 impl StateReader<'_> {
-    fn take(&mut self, n: usize) -> io::Result<&[u8]> {
+    fn take(&mut self, n: usize) -> Result<&[u8], StateError> {
         let end = self
             .at
             .checked_add(n)
             .filter(|&e| e <= self.bytes.len())
-            .ok_or_else(|| state_error("truncated"))?;
+            .ok_or(StateError::Truncated)?;
         let s = &self.bytes[self.at..end];
         self.at = end;
         Ok(s)
     }
-    fn array<const N: usize>(&mut self) -> io::Result<[u8; N]> {
+    fn array<const N: usize>(&mut self) -> Result<[u8; N], StateError> {
         let mut a = [0u8; N];
         a.copy_from_slice(self.take(N)?);
         Ok(a)
     }
-    fn u8(&mut self) -> io::Result<u8> {
+    fn u8(&mut self) -> Result<u8, StateError> {
         Ok(self.array::<1>()?[0])
     }
-    fn u16(&mut self) -> io::Result<u16> {
+    fn u16(&mut self) -> Result<u16, StateError> {
         Ok(u16::from_le_bytes(self.array()?))
     }
-    fn u32(&mut self) -> io::Result<u32> {
+    fn u32(&mut self) -> Result<u32, StateError> {
         Ok(u32::from_le_bytes(self.array()?))
     }
-    fn u64(&mut self) -> io::Result<u64> {
+    fn u64(&mut self) -> Result<u64, StateError> {
         Ok(u64::from_le_bytes(self.array()?))
     }
-    fn f64(&mut self) -> io::Result<f64> {
+    fn f64(&mut self) -> Result<f64, StateError> {
         Ok(f64::from_le_bytes(self.array()?))
     }
 }
@@ -274,8 +297,7 @@ mod tests {
         whole.write(second).unwrap();
         let mut before = ReportSink::new(area(50.0, 50.0), 4.0);
         before.write(first).unwrap();
-        let mut state = Vec::new();
-        before.save(&mut state).unwrap();
+        let state = before.save();
         let mut resumed = ReportSink::new(area(50.0, 50.0), 4.0);
         resumed.restore(&state).unwrap();
         assert!(resumed == before);
@@ -289,9 +311,7 @@ mod tests {
 
     /// The state of `sink`.
     fn state(sink: &ReportSink) -> Vec<u8> {
-        let mut b = Vec::new();
-        sink.save(&mut b).unwrap();
-        b
+        sink.save()
     }
 
     #[test]

@@ -1,5 +1,5 @@
-//! The output directory of a run: the names a run writes, and the rules
-//! that keep a run from destroying what it did not write.
+//! The output directory of a run: the rules that keep a run from
+//! destroying what it did not write.
 //!
 //! A run writes into a new or empty directory, or into one an earlier run
 //! wrote (it holds [`MARKER`]); then only the files a run writes
@@ -12,71 +12,11 @@
 use std::io;
 use std::path::{Path, PathBuf};
 
-use super::RunError;
-
-/// The file that marks a directory as one a run wrote into.
-pub const MARKER: &str = ".lidarsim-output";
-
-/// Every file a run may write, by its final name.
-pub const RUN_FILES: [&str; 14] = [
-    "points.las",
-    "points.laz",
-    "points.ply",
-    "points.xyz",
-    "points.wdp",
-    "survey.toml",
-    "trajectory.csv",
-    "trajectory_true.csv",
-    "trajectory_observed.csv",
-    "summary.json",
-    "report.html",
-    super::REPORT_STATE,
-    super::part::PART_POINTS,
-    super::part::PART_RECORD,
-];
-
-/// The directory in which a run writes the scene entries a program gave
-/// as data ([`crate::files::data_files`]).
-pub const DATA_DIR: &str = "scene";
-
-/// Whether `name` is a file a run writes: one of [`RUN_FILES`], the same
-/// with `.partial` (a file being written), or the [`MARKER`].
-pub fn is_run_file(name: &str) -> bool {
-    let base = name.strip_suffix(".partial").unwrap_or(name);
-    name == MARKER || RUN_FILES.contains(&base)
-}
-
-/// The directories of strips and tiles ([`crate::files::layout_dir`]).
-pub const LAYOUT_DIRS: [&str; 2] = ["strips", "tiles"];
-
-/// Whether `name` is a file a run writes into [`DATA_DIR`]:
-/// `mesh-I.obj`, `terrain-I.tif` or `point_cloud-I.xyz`.
-pub fn is_data_file(name: &str) -> bool {
-    [
-        ("mesh-", ".obj"),
-        ("terrain-", ".tif"),
-        ("point_cloud-", ".xyz"),
-    ]
-    .iter()
-    .any(|(prefix, suffix)| {
-        name.strip_prefix(prefix)
-            .and_then(|rest| rest.strip_suffix(suffix))
-            .is_some_and(|i| !i.is_empty() && i.bytes().all(|b| b.is_ascii_digit()))
-    })
-}
-
-/// Whether `name` is a file a run writes into a strips or tiles
-/// directory: `line-NNNN.las`/`.laz`, `tile_X_Y.las`/`.laz`, the tiles'
-/// `index.geojson`, the same with `.partial`, and the `.spill` directory.
-pub fn is_layout_file(name: &str) -> bool {
-    let base = name.strip_suffix(".partial").unwrap_or(name);
-    let las = |stem: &str| {
-        [".las", ".laz"]
-            .iter()
-            .any(|ext| base.strip_prefix(stem).is_some_and(|r| r.ends_with(ext)))
-    };
-    las("line-") || las("tile_") || base == "index.geojson" || name == ".spill"
-}
+use super::names::{
+    DATA_DIR, LAYOUT_DIRS, MARKER, RUN_FILES, is_data_file, is_layout_file, is_run_file,
+};
+use crate::error::{Error, PathError};
+use crate::output::{AtFile, WriteError};
 
 /// The entries of `dir/sub` if it is a directory holding only entries a
 /// run writes there (`None` otherwise).
@@ -111,11 +51,9 @@ fn own_dirs(dir: &Path) -> Vec<(&'static str, Vec<PathBuf>)> {
     out
 }
 
-fn error(path: &Path, kind: io::ErrorKind, message: String) -> RunError {
-    RunError {
-        path: path.to_path_buf(),
-        source: io::Error::new(kind, message),
-    }
+/// The output directory refused, for `reason`.
+fn refused(dir: &Path, reason: String) -> Error {
+    Error::Directory(PathError::new(dir, reason))
 }
 
 /// `path` made absolute, with symbolic links and `..` resolved as far as it
@@ -156,7 +94,7 @@ pub fn resolved(path: &Path) -> PathBuf {
 /// trajectory file): an input named as a file a run writes directly in
 /// it, or one inside the subdirectories a run clears there
 /// ([`DATA_DIR`], [`LAYOUT_DIRS`]).
-pub fn check_inputs(dir: &Path, inputs: &[PathBuf]) -> Result<(), RunError> {
+pub fn check_inputs(dir: &Path, inputs: &[PathBuf]) -> Result<(), Error> {
     let dir = resolved(dir);
     let cleared: Vec<PathBuf> = std::iter::once(DATA_DIR)
         .chain(LAYOUT_DIRS)
@@ -169,9 +107,8 @@ pub fn check_inputs(dir: &Path, inputs: &[PathBuf]) -> Result<(), RunError> {
         };
         let written = full.parent() == Some(dir.as_path()) && is_run_file(&name);
         if written || cleared.iter().any(|sub| full.starts_with(sub)) {
-            return Err(error(
+            return Err(Error::Input(PathError::new(
                 input,
-                io::ErrorKind::AlreadyExists,
                 format!(
                     "the run would write over or remove this input file (a run writes {} \
                      in its output directory {}): choose another output directory",
@@ -182,7 +119,7 @@ pub fn check_inputs(dir: &Path, inputs: &[PathBuf]) -> Result<(), RunError> {
                     },
                     dir.display()
                 ),
-            ));
+            )));
         }
     }
     Ok(())
@@ -192,7 +129,7 @@ pub fn check_inputs(dir: &Path, inputs: &[PathBuf]) -> Result<(), RunError> {
 /// directories a merge reads (`part_dirs`): the merge would clear what it
 /// reads, and taking the parts would remove its own output. Checked before
 /// anything is written.
-pub fn check_parts(dir: &Path, part_dirs: &[PathBuf]) -> Result<(), RunError> {
+pub fn check_parts(dir: &Path, part_dirs: &[PathBuf]) -> Result<(), Error> {
     let out = resolved(dir);
     for part in part_dirs {
         let p = resolved(part);
@@ -205,15 +142,14 @@ pub fn check_parts(dir: &Path, part_dirs: &[PathBuf]) -> Result<(), RunError> {
         } else {
             continue;
         };
-        return Err(error(
+        return Err(Error::Part(PathError::new(
             dir,
-            io::ErrorKind::AlreadyExists,
             format!(
                 "the merge's output directory {why} ({}): a merge never writes where its \
                  parts are; choose an output directory outside every part",
                 part.display()
             ),
-        ));
+        )));
     }
     Ok(())
 }
@@ -223,8 +159,8 @@ pub fn check_parts(dir: &Path, part_dirs: &[PathBuf]) -> Result<(), RunError> {
 /// files a run writes removed; any other non-empty directory is refused
 /// unless `overwrite`, which removes only the files a run writes and
 /// leaves the rest. The marker is written last.
-pub fn prepare_fresh(dir: &Path, overwrite: bool) -> Result<(), RunError> {
-    claim(dir, overwrite)?.clear(None)
+pub fn prepare_fresh(dir: &Path, overwrite: bool) -> Result<(), Error> {
+    Ok(claim(dir, overwrite)?.clear(None)?)
 }
 
 /// An output directory a run may write into, with the files an earlier run
@@ -242,17 +178,15 @@ pub struct Claimed {
 /// refuses it as [`prepare_fresh`] does, but removes nothing yet, so that a
 /// run can still fail (its survey's world, say) without losing the earlier
 /// run's files.
-pub fn claim(dir: &Path, overwrite: bool) -> Result<Claimed, RunError> {
+pub fn claim(dir: &Path, overwrite: bool) -> Result<Claimed, Error> {
     if dir.exists() && !dir.is_dir() {
-        return Err(error(
+        return Err(refused(
             dir,
-            io::ErrorKind::AlreadyExists,
             "is not a directory: choose a directory for the output".into(),
         ));
     }
-    std::fs::create_dir_all(dir).map_err(|e| RunError {
-        path: dir.to_path_buf(),
-        source: io::Error::new(e.kind(), format!("cannot create the output directory: {e}")),
+    std::fs::create_dir_all(dir).map_err(|e| {
+        Error::Directory(PathError::io(dir, "cannot create the output directory", e))
     })?;
     let Listing {
         claimed: ours,
@@ -267,9 +201,8 @@ pub fn claim(dir: &Path, overwrite: bool) -> Result<Claimed, RunError> {
         } else {
             String::new()
         };
-        return Err(error(
+        return Err(refused(
             dir,
-            io::ErrorKind::AlreadyExists,
             format!(
                 "the output directory is not empty and no lidarsim run wrote it (it holds {}{more}): \
                  choose a new or empty directory, or pass --overwrite (overwrite=True in Python) \
@@ -280,14 +213,10 @@ pub fn claim(dir: &Path, overwrite: bool) -> Result<Claimed, RunError> {
         ));
     }
     for path in &ours.files {
-        let meta = std::fs::symlink_metadata(path).map_err(|e| RunError {
-            path: path.clone(),
-            source: e,
-        })?;
+        let meta = std::fs::symlink_metadata(path).at(path)?;
         if meta.is_dir() {
-            return Err(error(
+            return Err(refused(
                 path,
-                io::ErrorKind::AlreadyExists,
                 "is a directory where the run writes a file: move it away".into(),
             ));
         }
@@ -303,16 +232,12 @@ struct Listing {
 }
 
 /// Lists `dir` into what a run wrote there and what it did not.
-fn list(dir: &Path) -> Result<Listing, RunError> {
-    let listed = |e: io::Error| RunError {
-        path: dir.to_path_buf(),
-        source: e,
-    };
+fn list(dir: &Path) -> Result<Listing, WriteError> {
     let mut files = Vec::new();
     let mut others = Vec::new();
     let own = own_dirs(dir);
-    for entry in std::fs::read_dir(dir).map_err(listed)? {
-        let entry = entry.map_err(listed)?;
+    for entry in std::fs::read_dir(dir).at(dir)? {
+        let entry = entry.at(dir)?;
         let name = entry.file_name().to_string_lossy().into_owned();
         if is_run_file(&name) {
             if name != MARKER {
@@ -338,7 +263,7 @@ fn list(dir: &Path) -> Result<Listing, RunError> {
 /// its points), so that no output of a failed run looks complete. The run
 /// cleared `dir` of such files when it began, so each of them is its own;
 /// anything else in `dir` is left, and so is the marker.
-pub fn roll_back(dir: &Path, keep: Option<&Path>) -> Result<(), RunError> {
+pub fn roll_back(dir: &Path, keep: Option<&Path>) -> Result<(), WriteError> {
     list(dir)?.claimed.remove(keep)
 }
 
@@ -385,21 +310,17 @@ impl Claimed {
     /// The second half of [`prepare_fresh`]: removes the earlier run's
     /// files (but `keep`, a file this run has begun meanwhile) and writes
     /// the marker.
-    pub fn clear(self, keep: Option<&Path>) -> Result<(), RunError> {
+    pub fn clear(self, keep: Option<&Path>) -> Result<(), WriteError> {
         let dir = self.dir.clone();
         self.remove(keep)?;
         crate::output::write_atomic(
             &dir.join(MARKER),
             b"lidarsim writes its runs into this directory; a new run replaces only its own files.\n",
         )
-        .map_err(|e| RunError {
-            path: dir.join(MARKER),
-            source: e,
-        })
     }
 
     /// Removes the files and subdirectories listed, but `keep`.
-    fn remove(self, keep: Option<&Path>) -> Result<(), RunError> {
+    fn remove(self, keep: Option<&Path>) -> Result<(), WriteError> {
         for path in self.files {
             if keep == Some(path.as_path()) {
                 continue;
@@ -407,7 +328,7 @@ impl Claimed {
             // A symbolic link is removed itself, never what it points to.
             match std::fs::remove_file(&path) {
                 Err(e) if e.kind() != io::ErrorKind::NotFound => {
-                    return Err(RunError { path, source: e });
+                    return Err(WriteError::io(&path, e));
                 }
                 _ => {}
             }
@@ -421,13 +342,10 @@ impl Claimed {
                 } else {
                     std::fs::remove_file(&path)
                 };
-                removed.map_err(|e| RunError {
-                    path: path.clone(),
-                    source: e,
-                })?;
+                removed.at(&path)?;
             }
             let path = self.dir.join(sub);
-            std::fs::remove_dir(&path).map_err(|e| RunError { path, source: e })?;
+            std::fs::remove_dir(&path).at(&path)?;
         }
         Ok(())
     }
@@ -436,6 +354,7 @@ impl Claimed {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::run::names::{DATA_DIR, MARKER};
 
     fn temp(name: &str) -> PathBuf {
         let d = std::env::temp_dir().join(format!("lidarsim-outdir-{name}-{}", std::process::id()));

@@ -11,30 +11,24 @@
 //! parts keep their points whole, every field ([`crate::output::part`]),
 //! and the merge hands them to the writers again.
 
-use std::io;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use super::names::{MARKER, REPORT_STATE, SURVEY};
+pub use super::names::{PART_LAS, PART_POINTS, PART_RECORD};
+use super::prepare::{new_report, write_survey};
 use super::resume::fnv1a_hex;
-use super::{RunError, RunOptions, outdir, write_survey};
+use super::{RunOptions, outdir};
+use crate::error::{Error, PathError};
+use crate::flight::Flight;
 use crate::output::checksum::file_crc32;
 use crate::output::part::PartWriter;
-use crate::output::{LasWriter, PointSink, write_atomic};
+use crate::output::{AtFile, FileSink, LasWriter, PointSink, WriteError, write_atomic};
 use crate::report::ReportSink;
 use crate::sim::parts::{MAX_PARTS, PulseRange, split};
-use crate::sim::{RunControl, RunCounts, Simulator, Timer};
+use crate::sim::{RunControl, RunCounts, RunOutcome, Simulator, Timer};
 use crate::survey::Survey;
-use crate::world::World;
-
-/// A part's point file, every field of every point (when not
-/// [`stitched`]).
-pub const PART_POINTS: &str = "points.part";
-/// A stitched part's point file: its records as the unsplit run's LAS
-/// file holds them.
-pub const PART_LAS: &str = "points.las";
-/// A part's record.
-pub const PART_RECORD: &str = "part.json";
 
 /// What a part did (`part.json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -107,14 +101,14 @@ pub fn check_part_number(k: usize, n: usize) -> Result<(), String> {
 /// a scene data file under [`outdir::DATA_DIR`].
 pub fn is_part_file(name: &str) -> bool {
     match name.split_once('/') {
-        Some((dir, file)) => dir == outdir::DATA_DIR && outdir::is_data_file(file),
+        Some((dir, file)) => dir == super::names::DATA_DIR && super::names::is_data_file(file),
         None => [
             PART_RECORD,
             PART_POINTS,
             PART_LAS,
-            super::REPORT_STATE,
-            "survey.toml",
-            outdir::MARKER,
+            REPORT_STATE,
+            SURVEY,
+            MARKER,
         ]
         .contains(&name),
     }
@@ -131,11 +125,11 @@ impl PartRecord {
         let mut files = vec![
             PART_RECORD.to_string(),
             self.points_file.clone(),
-            "survey.toml".to_string(),
-            outdir::MARKER.to_string(),
+            SURVEY.to_string(),
+            MARKER.to_string(),
         ];
         if self.report_bytes > 0 {
-            files.push(super::REPORT_STATE.to_string());
+            files.push(REPORT_STATE.to_string());
         }
         files
     }
@@ -156,12 +150,9 @@ impl PartRecord {
     }
 }
 
-/// An error of `kind` naming `path`.
-pub(super) fn error(path: &Path, kind: io::ErrorKind, message: String) -> RunError {
-    RunError {
-        path: path.to_path_buf(),
-        source: io::Error::new(kind, message),
-    }
+/// A part refused, at `path`, for `reason`.
+pub(super) fn refused(path: &Path, reason: impl Into<String>) -> Error {
+    Error::Part(PathError::new(path, reason))
 }
 
 /// Whether the parts of `survey` write their points as the LAS file of the
@@ -177,107 +168,48 @@ pub fn stitched(survey: &Survey) -> bool {
         && survey.output.layout == crate::survey::Layout::Single
 }
 
-/// The pulses of part `k` of `n` of `survey` over `world`'s lines.
-pub fn part_ranges(survey: &Survey, world: &World, k: usize, n: usize) -> Vec<PulseRange> {
-    let pulses: Vec<u64> = world.lines.iter().map(|l| survey.pulses_of(l)).collect();
-    split(&pulses, n).swap_remove(k - 1)
+/// The pulses of part `k` of `n` of `flight`.
+pub fn part_ranges(flight: &Flight, k: usize, n: usize) -> Vec<PulseRange> {
+    split(flight.line_pulses(), n).swap_remove(k - 1)
 }
 
-/// Simulates part `k` of `n` (`1 ≤ k ≤ n`) of `survey` into `out_dir`:
+/// Simulates part `k` of `n` (`1 ≤ k ≤ n`) of `flight` into `out_dir`:
 /// `survey.toml` (with the files of scene entries given as data), the
 /// points (`points.part`, or `points.las` and `report.state` when
 /// [`stitched`]) and `part.json`. A part stopped early (`options.stop`)
 /// leaves no point file and a record with `"complete": false`; the run
-/// options' resume and pulse budget do not apply to parts.
+/// options' resume and pulse budget do not apply to parts. A part that
+/// fails leaves nothing of its own behind.
 pub fn run_part(
-    survey: &Survey,
-    world: &World,
+    flight: &Flight,
     (k, n): (usize, usize),
     out_dir: &Path,
     options: &RunOptions<'_>,
-) -> Result<PartRecord, RunError> {
-    check_part_number(k, n).map_err(|why| error(out_dir, io::ErrorKind::InvalidInput, why))?;
+) -> Result<PartRecord, Error> {
+    check_part_number(k, n).map_err(|why| refused(out_dir, why))?;
+    let survey = flight.survey();
     outdir::check_inputs(out_dir, &crate::files::input_files(survey))?;
     outdir::prepare_fresh(out_dir, options.overwrite)?;
-    // A part that fails leaves nothing of its own behind.
     let written = outdir::Rollback::new(out_dir, None);
     let text = write_survey(survey, out_dir)?;
-    let ranges = part_ranges(survey, world, k, n);
-    let sim = Simulator::new(survey, world).with_waveforms(survey.output.formats.las_waveform);
+    let ranges = part_ranges(flight, k, n);
     let stitch = stitched(survey);
     let points_file = if stitch { PART_LAS } else { PART_POINTS };
     let points_path = out_dir.join(points_file);
-    let named = |path: &Path| {
-        let path = path.to_path_buf();
-        move |source| RunError { path, source }
-    };
-    let mut sink: Box<dyn PointSink> = if stitch {
-        let settings = crate::files::las_settings(survey, world);
-        Box::new(LasWriter::create(&points_path, settings).map_err(named(&points_path))?)
+    let sink: Box<FileSink> = if stitch {
+        Box::new(LasWriter::create(&points_path, flight.las_settings())?)
     } else {
-        Box::new(PartWriter::create(&points_path).map_err(named(&points_path))?)
+        Box::new(PartWriter::create(&points_path)?)
     };
-    let mut report = stitch.then(|| {
-        let plan = crate::plan::plan(survey, world);
-        ReportSink::new(super::covered_area(world, &plan), plan.point_density_per_m2)
-    });
-    let control = RunControl {
-        stop: options.stop,
-        only: Some(&ranges),
-        ..RunControl::default()
-    };
+    let mut report = stitch.then(|| new_report(flight));
     let timer = Timer::start();
-    let outcome = {
-        let mut sinks: Vec<&mut (dyn PointSink + 'static)> = vec![sink.as_mut()];
-        if let Some(r) = report.as_mut() {
-            sinks.push(r);
-        }
-        sim.run_from(options.threads, &mut sinks, options.progress, &control)
-    };
+    let outcome = simulate(flight, &ranges, sink, report.as_mut(), options)?;
     let wall_time_s = timer.seconds();
-    let (outcome, complete) = match outcome {
-        Ok(o) => {
-            let complete = o.stopped_at.is_none();
-            (o, complete)
-        }
-        Err(e) => {
-            sink.discard();
-            return Err(super::run_error(out_dir, e));
-        }
+    let kept = match &outcome {
+        Simulated::Complete(_) => keep(out_dir, points_file, report.as_ref())?,
+        Simulated::Stopped(_) => Kept::default(),
     };
-    let (mut points_bytes, mut report_bytes) = (0, 0);
-    let (mut points_crc32, mut report_crc32) = (None, None);
-    if complete {
-        sink.finish().map_err(|e| super::run_error(out_dir, e))?;
-        points_bytes = std::fs::metadata(&points_path)
-            .map_err(named(&points_path))?
-            .len();
-        points_crc32 = Some(file_crc32(&points_path).map_err(|e| super::run_error(out_dir, e))?);
-        if let Some(r) = &report {
-            let path = out_dir.join(super::REPORT_STATE);
-            let mut state = Vec::new();
-            r.save(&mut state).map_err(named(&path))?;
-            write_atomic(&path, &state).map_err(named(&path))?;
-            report_bytes = state.len() as u64;
-            let mut hasher = crc32fast::Hasher::new();
-            hasher.update(&state);
-            report_crc32 = Some(format!("{:08x}", hasher.finalize()));
-        }
-    } else {
-        drop(sink);
-    }
-    let mut files: Vec<String> = crate::files::data_files(survey)
-        .into_iter()
-        .map(|d| d.path)
-        .collect();
-    files.extend(["survey.toml", outdir::MARKER, PART_RECORD].map(String::from));
-    if complete {
-        files.push(points_file.to_string());
-        if report_bytes > 0 {
-            files.push(super::REPORT_STATE.to_string());
-        }
-    }
-    let c = outcome.counts;
+    let c = outcome.counts();
     let last = c
         .points_by_return
         .iter()
@@ -285,7 +217,7 @@ pub fn run_part(
         .map_or(0, |i| i + 1);
     let record = PartRecord {
         lidarsim_version: env!("CARGO_PKG_VERSION").to_string(),
-        complete,
+        complete: matches!(outcome, Simulated::Complete(_)),
         part: k,
         parts: n,
         seed: survey.seed,
@@ -297,17 +229,122 @@ pub fn run_part(
         pulses_with_echo: c.pulses_with_echo,
         points_by_return: c.points_by_return[..last].to_vec(),
         points_file: points_file.to_string(),
-        points_bytes,
-        report_bytes,
-        points_crc32,
-        report_crc32,
+        files: part_files(survey, points_file, &kept),
+        points_bytes: kept.points_bytes,
+        report_bytes: kept.report_bytes,
+        points_crc32: kept.points_crc32,
+        report_crc32: kept.report_crc32,
         threads: options.threads,
         wall_time_s,
-        files,
     };
     let path = out_dir.join(PART_RECORD);
-    let json = serde_json::to_vec_pretty(&record).map_err(|e| named(&path)(e.into()))?;
-    write_atomic(&path, &json).map_err(named(&path))?;
+    let json = serde_json::to_vec_pretty(&record)
+        .map_err(std::io::Error::from)
+        .at(&path)?;
+    write_atomic(&path, &json)?;
     written.done();
     Ok(record)
+}
+
+/// How a part's simulation ended.
+enum Simulated {
+    /// Every pulse of the part is in its point file, finished.
+    Complete(RunOutcome),
+    /// Stopped early: its point file is gone.
+    Stopped(RunOutcome),
+}
+
+impl Simulated {
+    fn counts(&self) -> RunCounts {
+        match self {
+            Simulated::Complete(o) | Simulated::Stopped(o) => o.counts.clone(),
+        }
+    }
+}
+
+/// Simulates the part's `ranges` of `flight` into `sink` (and `report`);
+/// finishes the sink when every pulse is in, drops it (and its partial
+/// file) when stopped early.
+fn simulate(
+    flight: &Flight,
+    ranges: &[PulseRange],
+    mut sink: Box<FileSink>,
+    report: Option<&mut ReportSink>,
+    options: &RunOptions<'_>,
+) -> Result<Simulated, Error> {
+    let survey = flight.survey();
+    let sim =
+        Simulator::new(survey, flight.world()).with_waveforms(survey.output.formats.las_waveform);
+    let control = RunControl {
+        stop: options.stop,
+        only: Some(ranges),
+        ..RunControl::default()
+    };
+    let result = {
+        let mut sinks: Vec<&mut (dyn PointSink<Error = WriteError> + 'static)> =
+            vec![sink.as_mut()];
+        if let Some(r) = report {
+            sinks.push(r);
+        }
+        sim.run_from(options.threads, &mut sinks, options.progress, &control)
+    };
+    match result {
+        Err(e) => {
+            sink.discard();
+            Err(e.into())
+        }
+        Ok(o) if o.stopped_at.is_none() => {
+            sink.finish()?;
+            Ok(Simulated::Complete(o))
+        }
+        Ok(o) => {
+            drop(sink);
+            Ok(Simulated::Stopped(o))
+        }
+    }
+}
+
+/// What a complete part keeps of its points and report, as its record
+/// describes them.
+#[derive(Debug, Default)]
+struct Kept {
+    points_bytes: u64,
+    points_crc32: Option<String>,
+    report_bytes: u64,
+    report_crc32: Option<String>,
+}
+
+/// Measures the complete part's point file and writes its report's state.
+fn keep(out_dir: &Path, points_file: &str, report: Option<&ReportSink>) -> Result<Kept, Error> {
+    let points_path = out_dir.join(points_file);
+    let mut kept = Kept {
+        points_bytes: std::fs::metadata(&points_path).at(&points_path)?.len(),
+        points_crc32: Some(file_crc32(&points_path).at(&points_path)?),
+        ..Kept::default()
+    };
+    if let Some(r) = report {
+        let state = r.save();
+        write_atomic(&out_dir.join(REPORT_STATE), &state)?;
+        kept.report_bytes = state.len() as u64;
+        let mut hasher = crc32fast::Hasher::new();
+        hasher.update(&state);
+        kept.report_crc32 = Some(format!("{:08x}", hasher.finalize()));
+    }
+    Ok(kept)
+}
+
+/// Every file the part wrote, by name.
+fn part_files(survey: &Survey, points_file: &str, kept: &Kept) -> Vec<String> {
+    let mut files: Vec<String> = crate::files::data_files(survey)
+        .into_iter()
+        .map(|d| d.path)
+        .collect();
+    files.extend([SURVEY, MARKER, PART_RECORD].map(String::from));
+    if kept.points_crc32.is_some() {
+        files.push(points_file.to_string());
+        if kept.report_bytes > 0 {
+            files.push(REPORT_STATE.to_string());
+        }
+    }
+    files
 }

@@ -5,22 +5,20 @@
 use crate::message::num;
 use crate::render::WaveformPlot;
 use crate::sensor::platform::FlightLine;
-use crate::sim::{Scratch, Simulator};
+use crate::sim::{PulseDetail, Simulator};
 use crate::survey::Survey;
 
 /// Simulates pulse `k` of `line` again and plots its waveform with the
-/// detection threshold and the echoes; the scratch holds the pulse's
-/// sub-ray returns and echoes.
-pub fn pulse(sim: &Simulator<'_>, line: &FlightLine, k: u64) -> (WaveformPlot, Scratch) {
-    let mut scratch = Scratch::default();
-    sim.simulate_pulse(line, k, &mut scratch, &mut Vec::new());
+/// detection threshold and the echoes; returns the plot and the pulse.
+pub fn pulse(sim: &Simulator<'_>, line: &FlightLine, k: u64) -> (WaveformPlot, PulseDetail) {
+    let detail = sim.replay(line, k);
     let plot = WaveformPlot::new(
-        scratch.waveform(),
-        scratch.echoes(),
+        &detail.waveform,
+        &detail.echoes,
         sim.receiver().config().bin_s,
         sim.detector().threshold(),
     );
-    (plot, scratch)
+    (plot, detail)
 }
 
 /// The flight line (index from 0) and pulse emitted at GPS time

@@ -17,12 +17,12 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use super::RunError;
-use crate::output::AtomicFile;
-use crate::sensor::platform::FlightLine;
+use super::names::{REPORT_STATE, SUMMARY, SURVEY};
+use crate::error::{Error, PathError};
+use crate::flight::Flight;
+use crate::output::{AtFile, AtomicFile, WriteError};
 use crate::sim::{PulsePosition, RunCounts};
 pub use crate::summary::{FileState, NextPulse, ResumeState};
-use crate::survey::Survey;
 
 /// What a resumed run reads back from the `summary.json` of the
 /// interrupted one.
@@ -139,15 +139,16 @@ pub fn record(
     next: NextPulse,
     counts: &RunCounts,
     report_state: &[u8],
-) -> io::Result<ResumeState> {
+) -> Result<ResumeState, WriteError> {
     let mut files = BTreeMap::new();
     for name in names {
         let path = AtomicFile::partial_of(&dir.join(name));
-        let bytes = std::fs::metadata(&path)?.len();
-        let tail_fnv1a = tail_hash(&path, bytes)?;
+        let bytes = std::fs::metadata(&path).at(&path)?.len();
+        let tail_fnv1a = tail_hash(&path, bytes).at(&path)?;
         files.insert(name.to_string(), FileState { bytes, tail_fnv1a });
     }
-    let survey_fnv1a = fnv1a_hex(&std::fs::read(dir.join("survey.toml"))?);
+    let survey_path = dir.join(SURVEY);
+    let survey_fnv1a = fnv1a_hex(&std::fs::read(&survey_path).at(&survey_path)?);
     let report_state_fnv1a = fnv1a_hex(report_state);
     let state_fnv1a = state_hash(
         seed,
@@ -166,26 +167,20 @@ pub fn record(
 }
 
 /// Reads the `summary.json` of the run interrupted in `dir` and checks it
-/// against `survey` (the run's own `survey.toml`), the saved report state
-/// (returned with it) and the point files `names` the survey writes. Every
-/// refusal names the file and says why.
-pub fn read(
-    dir: &Path,
-    survey: &Survey,
-    lines: &[FlightLine],
-    names: &[&str],
-) -> Result<(Interrupted, Vec<u8>), RunError> {
-    let path = dir.join("summary.json");
-    let refuse = |path: &Path, msg: String| RunError {
-        path: path.to_path_buf(),
-        source: io::Error::new(io::ErrorKind::InvalidData, msg),
-    };
-    let text = std::fs::read(&path).map_err(|e| RunError {
-        path: path.clone(),
-        source: io::Error::new(
-            e.kind(),
-            format!("{e}: no interrupted run to resume in this directory"),
-        ),
+/// against `flight` (of the run's own `survey.toml`), the saved report
+/// state (returned with it) and the point files `names` the survey writes.
+/// Every refusal names the file and says why.
+pub fn read(dir: &Path, flight: &Flight, names: &[&str]) -> Result<(Interrupted, Vec<u8>), Error> {
+    let survey = flight.survey();
+    let path = dir.join(SUMMARY);
+    let refuse = |path: &Path, msg: String| Error::Resume(PathError::new(path, msg));
+    let text = std::fs::read(&path).map_err(|e| {
+        let reason = format!("{e}: no interrupted run to resume in this directory");
+        Error::Resume(PathError {
+            path: path.clone(),
+            reason,
+            cause: Some(e),
+        })
     })?;
     let prev: Interrupted = serde_json::from_slice(&text)
         .map_err(|e| refuse(&path, format!("not a summary of lidarsim: {e}")))?;
@@ -229,13 +224,13 @@ pub fn read(
         )
     };
     // The position and the pulse count must agree.
-    let line_ok = next.line >= 1 && (next.line as usize) <= lines.len();
-    let before: u64 = lines
+    let line_pulses = flight.line_pulses();
+    let line_ok = next.line >= 1 && (next.line as usize) <= line_pulses.len();
+    let before: u64 = line_pulses
         .iter()
         .take(next.line.saturating_sub(1) as usize)
-        .map(|l| survey.pulses_of(l))
         .sum();
-    let in_line = line_ok && next.pulse < survey.pulses_of(&lines[next.line as usize - 1]);
+    let in_line = line_ok && next.pulse < line_pulses[next.line as usize - 1];
     let counts = prev.counts();
     if !in_line || before + next.pulse != counts.pulse_slots {
         return Err(changed(&format!(
@@ -254,11 +249,9 @@ pub fn read(
     if want != state.state_fnv1a {
         return Err(changed("summary.json was edited"));
     }
-    let survey_toml = dir.join("survey.toml");
-    let text = std::fs::read(&survey_toml).map_err(|e| RunError {
-        path: survey_toml.clone(),
-        source: e,
-    })?;
+    let survey_toml = dir.join(SURVEY);
+    let text = std::fs::read(&survey_toml)
+        .map_err(|e| Error::Resume(PathError::io(&survey_toml, "cannot read it", e)))?;
     if fnv1a_hex(&text) != state.survey_fnv1a {
         return Err(refuse(
             &survey_toml,
@@ -267,13 +260,11 @@ pub fn read(
                 .into(),
         ));
     }
-    let state_path = dir.join(super::REPORT_STATE);
-    let report_state = std::fs::read(&state_path).map_err(|e| RunError {
-        path: state_path,
-        source: e,
-    })?;
+    let state_path = dir.join(REPORT_STATE);
+    let report_state = std::fs::read(&state_path)
+        .map_err(|e| Error::Resume(PathError::io(&state_path, "cannot read it", e)))?;
     if fnv1a_hex(&report_state) != state.report_state_fnv1a {
-        return Err(changed(&format!("{} changed", super::REPORT_STATE)));
+        return Err(changed(&format!("{REPORT_STATE} changed")));
     }
     let mut recorded: Vec<&str> = state.files.keys().map(String::as_str).collect();
     let mut wanted = names.to_vec();

@@ -7,6 +7,7 @@
 //! (±15 %). A stand's trees go into the scene on all threads
 //! ([`Scene::add_stand`]).
 
+use super::foliage::FoliageSettings;
 use super::tree::TreeSpec;
 use super::{MaterialId, Scene, SceneObject, Species, tree_part};
 use crate::geometry::DVec3;
@@ -150,8 +151,8 @@ impl Scene {
     /// [`Scene::add_tree`] would (a trunk, then a crown, one object per
     /// tree) but built on all threads and named by number
     /// ([`SceneObject::StandTree`]).
-    pub fn add_stand(&mut self, forest: usize, trees: &[TreeSpec], whorl_spacing_m: f64) {
-        self.add_trees(trees, whorl_spacing_m, |tree| SceneObject::StandTree {
+    pub fn add_stand(&mut self, forest: usize, trees: &[TreeSpec], foliage: &FoliageSettings) {
+        self.add_trees(trees, foliage, |tree| SceneObject::StandTree {
             forest: forest as u32,
             tree,
         });
@@ -162,7 +163,7 @@ impl Scene {
     pub fn add_trees(
         &mut self,
         trees: &[TreeSpec],
-        whorl_spacing_m: f64,
+        foliage: &FoliageSettings,
         object: impl Fn(u32) -> SceneObject,
     ) {
         // The materials, in the order add_tree would add them; a stand has
@@ -178,7 +179,7 @@ impl Scene {
                 {
                     ids
                 }
-                _ => self.tree_materials(t),
+                _ => self.tree_materials(t, foliage),
             };
             last = Some((t, ids));
             materials.push(ids);
@@ -188,13 +189,7 @@ impl Scene {
             .extend((0..trees.len()).map(|tree| object(tree as u32)));
         let stand = (0..2 * trees.len()).into_par_iter().map(|k| {
             let object = (first_object + k / 2) as u32;
-            tree_part(
-                &trees[k / 2],
-                k % 2 == 1,
-                materials[k / 2],
-                object,
-                whorl_spacing_m,
-            )
+            tree_part(&trees[k / 2], k % 2 == 1, materials[k / 2], object, foliage)
         });
         self.primitives.par_extend(stand);
     }
@@ -490,9 +485,13 @@ mod tests {
         one_by_one.add_object("polygon[0]");
         let mut stand_scene = one_by_one.clone();
         for (j, t) in trees.iter().enumerate() {
-            one_by_one.add_tree(t, 0.3, format!("forest[2].tree[{j}]"));
+            one_by_one.add_tree(
+                t,
+                &FoliageSettings::default(),
+                format!("forest[2].tree[{j}]"),
+            );
         }
-        stand_scene.add_stand(2, &trees, 0.3);
+        stand_scene.add_stand(2, &trees, &FoliageSettings::default());
         assert_eq!(stand_scene.materials, one_by_one.materials);
         let names = |s: &Scene| s.objects.iter().map(|o| o.to_string()).collect::<Vec<_>>();
         assert_eq!(names(&stand_scene), names(&one_by_one));

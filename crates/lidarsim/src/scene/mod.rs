@@ -9,6 +9,7 @@
 //! way through crowns that of [`crate::canopy`].
 
 pub mod cloud;
+pub mod foliage;
 pub mod forest;
 mod polygon;
 mod species;
@@ -16,6 +17,7 @@ pub mod terrain;
 pub mod tree;
 mod triangle;
 
+pub use foliage::{FoliageModel, FoliageSettings};
 pub use polygon::{PLANARITY_TOLERANCE_M, Polygon, PolygonError};
 pub use species::{Species, SpeciesPreset};
 pub use tree::{Crown, CrownLevel, CrownProfile, Envelope, TreeSpec, Trunk};
@@ -397,20 +399,31 @@ impl Scene {
 
     /// Adds a tree as two primitives: its trunk (opaque, bark) and its crown
     /// (a volume, foliage; no incidence term), both of class vegetation.
-    pub fn add_tree(&mut self, tree: &TreeSpec, whorl_spacing_m: f64, name: impl Into<String>) {
+    pub fn add_tree(
+        &mut self,
+        tree: &TreeSpec,
+        foliage: &FoliageSettings,
+        name: impl Into<String>,
+    ) {
         let object = self.add_object(name);
-        let materials = self.tree_materials(tree);
+        let materials = self.tree_materials(tree, foliage);
         for crown in [false, true] {
-            let part = tree_part(tree, crown, materials, object, whorl_spacing_m);
+            let part = tree_part(tree, crown, materials, object, foliage);
             self.primitives.push(part);
         }
     }
 
-    /// The ids of a tree's bark and foliage materials, added if new.
-    pub(crate) fn tree_materials(&mut self, tree: &TreeSpec) -> (MaterialId, MaterialId) {
+    /// The ids of a tree's bark and foliage materials, added if new (the
+    /// crown's reflectance as `foliage`'s model has it).
+    pub(crate) fn tree_materials(
+        &mut self,
+        tree: &TreeSpec,
+        foliage: &FoliageSettings,
+    ) -> (MaterialId, MaterialId) {
         let species = tree.species.name();
         let bark = self.add_named_material(species, " bark", tree.bark_reflectance, 1.0);
-        let foliage = self.add_named_material(species, " foliage", tree.foliage_reflectance, 0.0);
+        let crown = tree.crown_reflectance(foliage);
+        let foliage = self.add_named_material(species, " foliage", crown, 0.0);
         (bark, foliage)
     }
 
@@ -458,10 +471,10 @@ pub(crate) fn tree_part(
     crown: bool,
     (bark, foliage): (MaterialId, MaterialId),
     object: ObjectId,
-    whorl_spacing_m: f64,
+    settings: &FoliageSettings,
 ) -> Primitive {
     let (shape, material) = if crown {
-        (Shape::Crown(Box::new(tree.crown(whorl_spacing_m))), foliage)
+        (Shape::Crown(Box::new(tree.crown(settings))), foliage)
     } else {
         (Shape::Trunk(tree.trunk()), bark)
     };

@@ -27,8 +27,16 @@ pub struct SpeciesPreset {
     pub crown_r0_m: f64,
     /// Slope of the crown radius allometry, m per cm of dbh.
     pub crown_r1_m_per_cm: f64,
-    /// Interception coefficient `k` of `1 − exp(−k·ρ·Δs)`, 1/m.
+    /// Attenuation `μ` of the crown's plant area, 1/m, in the physical
+    /// foliage model (its density averages 1 over a crown): needles or
+    /// leaves and woody area, `2·STAR·NAD + G·(BAI/LAI)·NAD`.
     pub extinction_per_m: f64,
+    /// Interception coefficient `k` of the specification's density field
+    /// (which averages 0.16 over a crown), 1/m.
+    pub specification_extinction_per_m: f64,
+    /// Woody (branch) area per unit needle or leaf area, BAI/LAI: what the
+    /// crown's echoes take of the bark's reflectance.
+    pub woody_ratio: f64,
     /// Foliage reflectance at 1064 nm.
     pub foliage_reflectance: f64,
     /// Bark reflectance at 1064 nm.
@@ -79,7 +87,9 @@ impl Species {
                 flat_top_fraction: 0.1,
                 crown_r0_m: 0.519,
                 crown_r1_m_per_cm: 0.0744,
-                extinction_per_m: 1.8,
+                extinction_per_m: 0.38,
+                specification_extinction_per_m: 1.8,
+                woody_ratio: 0.18,
                 foliage_reflectance: 0.42,
                 bark_reflectance: 0.35,
                 height_a_m: 32.694,
@@ -92,7 +102,9 @@ impl Species {
                 flat_top_fraction: 0.02,
                 crown_r0_m: 0.761,
                 crown_r1_m_per_cm: 0.060,
-                extinction_per_m: 2.8,
+                extinction_per_m: 0.9,
+                specification_extinction_per_m: 2.8,
+                woody_ratio: 0.18,
                 foliage_reflectance: 0.40,
                 bark_reflectance: 0.30,
                 height_a_m: 39.691,
@@ -105,7 +117,9 @@ impl Species {
                 flat_top_fraction: 0.1,
                 crown_r0_m: 0.750,
                 crown_r1_m_per_cm: 0.0875,
-                extinction_per_m: 2.5,
+                extinction_per_m: 0.46,
+                specification_extinction_per_m: 2.5,
+                woody_ratio: 0.15,
                 foliage_reflectance: 0.48,
                 bark_reflectance: 0.50,
                 height_a_m: 37.089,

@@ -5,11 +5,18 @@
 //! crown-base height. It becomes two scene primitives: an opaque
 //! [`Trunk`] (a cone, "the stem is a cone (c==1)") and a [`Crown`], the
 //! envelope `r(χ) = a + b·χ^c` (specification Eq. 4, χ = 0 at the top and 1
-//! at the crown base) filled with a foliage density
-//! `thetafactor × heightfactor × radiusfactor` (specification, Fig. 15 and
-//! the three factors that follow it). Sub-rays march through crowns and are
-//! intercepted by a lottery (see [`crate::canopy`]).
+//! at the crown base) filled with a relative density `ρ` of plant area
+//! ([`FoliageModel`]): by default the physical one — needles or leaves and
+//! woody area spread through the envelope as a random medium, denser
+//! towards the outer hull and clumped in cells at branch scale — or the
+//! specification's `thetafactor × heightfactor × radiusfactor` (its
+//! Fig. 15 and the three factors that follow it). Sub-rays march through
+//! crowns and are intercepted by a lottery (see [`crate::canopy`]); sources
+//! of every parameter are in `docs/trees.md`.
 
+use super::foliage::{
+    Clumps, Field, FoliageModel, FoliageSettings, LevelField, Whorls, clump_hash, level_key, shell,
+};
 use super::species::Species;
 use crate::geometry::{Aabb, DVec3, Ray, VerticalCylinder};
 
@@ -43,8 +50,9 @@ pub struct TreeSpec {
     pub bark_reflectance: f64,
     /// Maximum crown radius `a + b`, m (default: species allometry).
     pub crown_radius_m: f64,
-    /// Interception coefficient `k`, 1/m (default: species preset).
-    pub extinction_per_m: f64,
+    /// Interception coefficient `k`, 1/m (`None`: the species preset's
+    /// for the survey's foliage model).
+    pub extinction_per_m: Option<f64>,
     /// When set, a constant relative foliage density inside the envelope
     /// replaces the three-factor model (for tests and simple crowns).
     pub uniform_density: Option<f64>,
@@ -71,7 +79,7 @@ impl TreeSpec {
             foliage_reflectance: p.foliage_reflectance,
             bark_reflectance: p.bark_reflectance,
             crown_radius_m: species.crown_radius_m(dbh_m),
-            extinction_per_m: p.extinction_per_m,
+            extinction_per_m: None,
             uniform_density: None,
             seed: 0,
         }
@@ -82,13 +90,35 @@ impl TreeSpec {
         Trunk::new(self.base_m, self.dbh_m, self.height_m)
     }
 
-    /// The crown.
-    pub fn crown(&self, whorl_spacing_m: f64) -> Crown {
+    /// The crown, filled as `foliage` says.
+    pub fn crown(&self, foliage: &FoliageSettings) -> Crown {
         let p = self.species.preset();
         let a = p.flat_top_fraction * self.crown_radius_m;
-        let whorl_phase = (crate::rng::mix64(self.seed) >> 11) as f64 / (1u64 << 53) as f64
-            * std::f64::consts::TAU;
-        let (phase_sin, phase_cos) = whorl_phase.sin_cos();
+        let field = match (self.uniform_density, foliage.model) {
+            (Some(rho), _) => Field::Uniform(rho),
+            (None, FoliageModel::Specification) => {
+                let whorl_phase = (crate::rng::mix64(self.seed) >> 11) as f64 / (1u64 << 53) as f64
+                    * std::f64::consts::TAU;
+                let (phase_sin, phase_cos) = whorl_phase.sin_cos();
+                Field::Specification(Whorls {
+                    spacing_m: foliage.whorl_spacing_m,
+                    phase: whorl_phase,
+                    phase_cos,
+                    phase_sin,
+                    step: GOLDEN_ANGLE,
+                })
+            }
+            (None, FoliageModel::Physical) => Field::Physical(Clumps {
+                cell_m: foliage.clump_m,
+                fraction: foliage.clump_fraction,
+                key: (crate::rng::mix64(self.seed ^ 0x636c_756d_7073) >> 32) as u32,
+                shell_m: foliage.shell_m,
+            }),
+        };
+        let default_k = match foliage.model {
+            FoliageModel::Physical => p.extinction_per_m,
+            FoliageModel::Specification => p.specification_extinction_per_m,
+        };
         Crown {
             axis_x: self.base_m.x,
             axis_y: self.base_m.y,
@@ -97,13 +127,22 @@ impl TreeSpec {
             a,
             b: self.crown_radius_m - a,
             c: p.shape_c,
-            extinction_per_m: self.extinction_per_m,
-            whorl_spacing_m,
-            whorl_phase,
-            phase_cos,
-            phase_sin,
-            whorl_step: GOLDEN_ANGLE,
-            uniform_density: self.uniform_density,
+            extinction_per_m: self.extinction_per_m.unwrap_or(default_k),
+            field,
+        }
+    }
+
+    /// The reflectance of the crown's plant area in `foliage`'s model:
+    /// the physical model's includes the woody area (bark reflectance
+    /// weighted by the species' branch-to-leaf area), the specification's
+    /// is the foliage's.
+    pub fn crown_reflectance(&self, foliage: &FoliageSettings) -> f64 {
+        let w = self.species.preset().woody_ratio;
+        match (foliage.model, self.uniform_density) {
+            (FoliageModel::Physical, None) => {
+                (self.foliage_reflectance + w * self.bark_reflectance) / (1.0 + w)
+            }
+            _ => self.foliage_reflectance,
         }
     }
 }
@@ -224,20 +263,14 @@ pub struct Crown {
     c: f64,
     /// Interception coefficient `k`, 1/m.
     pub extinction_per_m: f64,
-    whorl_spacing_m: f64,
-    whorl_phase: f64,
-    /// `cos` and `sin` of `whorl_phase`, for [`Crown::level`].
-    phase_cos: f64,
-    phase_sin: f64,
-    whorl_step: f64,
-    uniform_density: Option<f64>,
+    /// How the envelope is filled.
+    field: Field,
 }
 
-/// What a crown's foliage density depends on at one height (the height
-/// factor, the envelope radius and the whorl's rotation), computed once
-/// for all sub-rays of a pulse that cross that height: only the
-/// horizontal offset from the stem is left to each sub-ray
-/// ([`CrownLevel::density`]).
+/// What a crown's foliage density depends on at one height (the envelope
+/// radius and the field's factors there), computed once for all sub-rays
+/// of a pulse that cross that height: only the horizontal offset from the
+/// stem is left to each sub-ray ([`CrownLevel::density`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CrownLevel {
     /// Envelope radius squared, m².
@@ -246,38 +279,54 @@ pub struct CrownLevel {
     pub radius: f64,
     /// `1 / radius` (0 for a zero radius), 1/m.
     pub inv_radius: f64,
-    /// The height factor at this level.
-    pub height_factor: f64,
-    /// `cos` of the whorl's rotation `f` at this level.
-    pub whorl_cos: f64,
-    /// `sin` of the whorl's rotation `f` at this level.
-    pub whorl_sin: f64,
-    /// The crown's constant density, when it has one.
-    pub uniform_density: Option<f64>,
+    /// The field at this level.
+    pub field: LevelField,
 }
 
 impl CrownLevel {
-    /// Relative foliage density at horizontal offset `(dx, dy)` from the
-    /// stem axis: [`Crown::density_at`]'s three factors, with `cos(6φ + f)`
-    /// as `Re((dx + i·dy)⁶ e^{if}) / d⁶` (no division per factor, no
-    /// branch on the data, so that a loop over sub-rays vectorises).
+    /// Relative density at horizontal offset `(dx, dy)` from the stem
+    /// axis, as [`Crown::density_at`] gives it; the specification's
+    /// `cos(6φ + f)` as `Re((dx + i·dy)⁶ e^{if}) / d⁶` (no division per
+    /// factor, no branch on the data, so that a loop over sub-rays
+    /// vectorises).
     #[inline(always)]
     pub fn density(&self, dx: f64, dy: f64) -> f64 {
         let d2 = dx * dx + dy * dy;
-        let radius = 1.0 - d2.sqrt() * self.inv_radius;
-        let (x2, y2) = (dx * dx - dy * dy, 2.0 * dx * dy);
-        let (x3, y3) = (x2 * dx - y2 * dy, x2 * dy + y2 * dx);
-        let (x6, y6) = (x3 * x3 - y3 * y3, 2.0 * x3 * y3);
-        let d6 = d2 * d2 * d2;
-        // On the axis φ = 0, as in `density_at`.
-        let theta = if d2 > 1e-24 {
-            (x6 * self.whorl_cos - y6 * self.whorl_sin).abs() / d6
-        } else {
-            self.whorl_cos.abs()
+        let rc = d2.sqrt() * self.inv_radius;
+        let rho = match self.field {
+            LevelField::Uniform(rho) => rho,
+            LevelField::Specification {
+                height_factor,
+                whorl_cos,
+                whorl_sin,
+            } => {
+                let (x2, y2) = (dx * dx - dy * dy, 2.0 * dx * dy);
+                let (x3, y3) = (x2 * dx - y2 * dy, x2 * dy + y2 * dx);
+                let (x6, y6) = (x3 * x3 - y3 * y3, 2.0 * x3 * y3);
+                let d6 = d2 * d2 * d2;
+                // On the axis φ = 0, as in `density_at`.
+                let theta = if d2 > 1e-24 {
+                    (x6 * whorl_cos - y6 * whorl_sin).abs() / d6
+                } else {
+                    whorl_cos.abs()
+                };
+                theta * height_factor * (1.0 - rc)
+            }
+            LevelField::Physical {
+                inv_cell,
+                key,
+                below,
+                weight,
+                core_rc,
+            } => {
+                let (i, j) = (
+                    (dx * inv_cell).floor() as i32,
+                    (dy * inv_cell).floor() as i32,
+                );
+                let held = clump_hash(i, j, key) < below;
+                if held && rc >= core_rc { weight } else { 0.0 }
+            }
         };
-        let rho = self
-            .uniform_density
-            .unwrap_or(theta * self.height_factor * radius);
         if d2 <= self.radius_sq { rho } else { 0.0 }
     }
 }
@@ -404,35 +453,59 @@ impl CrownProfile {
     pub fn level_within(&self, e: Envelope) -> CrownLevel {
         let c = &self.crown;
         let Envelope { z, chi, radius } = e;
-        let whorl = ((c.z_top - z) / c.whorl_spacing_m).floor();
-        // The whorl's number through i64: a cheaper conversion than to
-        // usize, the same for the table's range (and out of it otherwise).
-        let rotation = self.rotations.and_then(|t| {
-            let w = whorl as i64;
-            if (0..t.len() as i64).contains(&w) {
-                Some(&t[w as usize])
-            } else {
-                None
-            }
-        });
-        let (whorl_cos, whorl_sin) = match rotation {
-            Some(&(rc, rs)) => (
-                c.phase_cos * rc - c.phase_sin * rs,
-                c.phase_sin * rc + c.phase_cos * rs,
-            ),
-            None => {
-                let (s, co) = (c.whorl_phase + whorl * c.whorl_step).sin_cos();
-                (co, s)
+        let field = match c.field {
+            Field::Uniform(rho) => LevelField::Uniform(rho),
+            Field::Specification(w) => self.whorl_level(&w, z, chi),
+            Field::Physical(p) => {
+                let m = ((c.z_top - z) / p.cell_m).floor() as i64;
+                let (core_rc, ring) = shell(radius, p.shell_m);
+                LevelField::Physical {
+                    inv_cell: 1.0 / p.cell_m,
+                    key: level_key(p.key, m),
+                    below: (p.fraction * 4_294_967_296.0).min(4_294_967_295.0) as u32,
+                    weight: ring / p.fraction,
+                    core_rc,
+                }
             }
         };
         CrownLevel {
             radius_sq: radius * radius,
             radius,
             inv_radius: if radius > 0.0 { 1.0 / radius } else { 0.0 },
+            field,
+        }
+    }
+
+    /// The specification's field at world height `z`, depth `chi`: the
+    /// height factor and the whorl's rotation from the stored phase turned
+    /// by a tabulated multiple of the golden angle.
+    #[inline]
+    fn whorl_level(&self, w: &Whorls, z: f64, chi: f64) -> LevelField {
+        let whorl = ((self.crown.z_top - z) / w.spacing_m).floor();
+        // The whorl's number through i64: a cheaper conversion than to
+        // usize, the same for the table's range (and out of it otherwise).
+        let rotation = self.rotations.and_then(|t| {
+            let n = whorl as i64;
+            if (0..t.len() as i64).contains(&n) {
+                Some(&t[n as usize])
+            } else {
+                None
+            }
+        });
+        let (whorl_cos, whorl_sin) = match rotation {
+            Some(&(rc, rs)) => (
+                w.phase_cos * rc - w.phase_sin * rs,
+                w.phase_sin * rc + w.phase_cos * rs,
+            ),
+            None => {
+                let (s, co) = (w.phase + whorl * w.step).sin_cos();
+                (co, s)
+            }
+        };
+        LevelField::Specification {
             height_factor: if chi <= 0.5 { 1.0 } else { 2.0 * (1.0 - chi) },
             whorl_cos,
             whorl_sin,
-            uniform_density: c.uniform_density,
         }
     }
 }
@@ -511,7 +584,10 @@ impl Crown {
         CrownProfile {
             crown: *self,
             shape: ShapeFactor::of(self.c),
-            rotations: (self.whorl_step == GOLDEN_ANGLE).then(whorl_rotations),
+            rotations: match self.field {
+                Field::Specification(w) if w.step == GOLDEN_ANGLE => Some(whorl_rotations()),
+                _ => None,
+            },
         }
     }
 
@@ -523,7 +599,10 @@ impl Crown {
         self.profile().level(z)
     }
 
-    /// Relative foliage density (0–1) at `p`, 0 outside the envelope:
+    /// Relative density at `p`, 0 outside the envelope, as the crown's
+    /// field gives it: a constant; the physical model's radial profile
+    /// `(3 + 6·rc)/7` times `1/fraction` in a clump cell that holds
+    /// foliage (0 in one that does not); or the specification's
     /// thetafactor `|cos(6φ + f)|` with `f` rotated every whorl,
     /// heightfactor 1 down to χ = 0.5 then falling linearly to 0 at χ = 1
     /// (the specification writes "1−2χ", which is not continuous at 0.5;
@@ -539,26 +618,39 @@ impl Crown {
         if d2 > r * r {
             return 0.0;
         }
-        if let Some(rho) = self.uniform_density {
-            return rho;
-        }
         let d = d2.sqrt();
         let rc = if r > 0.0 { d / r } else { 0.0 };
-        // cos(6φ + f) without trigonometry of φ: (cos φ + i sin φ)⁶ by
-        // complex squaring and multiplication.
-        let (c1, s1) = if d > 0.0 {
-            (dx / d, dy / d)
-        } else {
-            (1.0, 0.0)
-        };
-        let (c2, s2) = (c1 * c1 - s1 * s1, 2.0 * c1 * s1);
-        let (c3, s3) = (c2 * c1 - s2 * s1, c2 * s1 + s2 * c1);
-        let (c6, s6) = (c3 * c3 - s3 * s3, 2.0 * c3 * s3);
-        let whorl = ((self.z_top - p.z) / self.whorl_spacing_m).floor();
-        let (sf, cf) = (self.whorl_phase + whorl * self.whorl_step).sin_cos();
-        let theta = (c6 * cf - s6 * sf).abs();
-        let height = if chi <= 0.5 { 1.0 } else { 2.0 * (1.0 - chi) };
-        theta * height * (1.0 - rc)
+        match self.field {
+            Field::Uniform(rho) => rho,
+            Field::Physical(c) => {
+                let cell = |v: f64| (v / c.cell_m).floor() as i64;
+                let key = level_key(c.key, cell(self.z_top - p.z));
+                let below = (c.fraction * 4_294_967_296.0).min(4_294_967_295.0) as u32;
+                let (core_rc, ring) = shell(r, c.shell_m);
+                if clump_hash(cell(dx) as i32, cell(dy) as i32, key) < below && rc >= core_rc {
+                    ring / c.fraction
+                } else {
+                    0.0
+                }
+            }
+            Field::Specification(w) => {
+                // cos(6φ + f) without trigonometry of φ: (cos φ + i sin φ)⁶
+                // by complex squaring and multiplication.
+                let (c1, s1) = if d > 0.0 {
+                    (dx / d, dy / d)
+                } else {
+                    (1.0, 0.0)
+                };
+                let (c2, s2) = (c1 * c1 - s1 * s1, 2.0 * c1 * s1);
+                let (c3, s3) = (c2 * c1 - s2 * s1, c2 * s1 + s2 * c1);
+                let (c6, s6) = (c3 * c3 - s3 * s3, 2.0 * c3 * s3);
+                let whorl = ((self.z_top - p.z) / w.spacing_m).floor();
+                let (sf, cf) = (w.phase + whorl * w.step).sin_cos();
+                let theta = (c6 * cf - s6 * sf).abs();
+                let height = if chi <= 0.5 { 1.0 } else { 2.0 * (1.0 - chi) };
+                theta * height * (1.0 - rc)
+            }
+        }
     }
 
     /// The crown's bounding cylinder (radius `a + b`, base to top).
@@ -587,7 +679,7 @@ mod tests {
 
     #[test]
     fn envelope_follows_equation_4() {
-        let crown = pine().crown(0.3);
+        let crown = pine().crown(&FoliageSettings::specification());
         let (zb, zt) = crown.z_range();
         assert_eq!((zb, zt), (13.0, 23.0));
         for chi in [0.0, 0.25, 0.5, 0.9, 1.0] {
@@ -604,7 +696,7 @@ mod tests {
 
     #[test]
     fn density_factors() {
-        let crown = pine().crown(0.3);
+        let crown = pine().crown(&FoliageSettings::specification());
         let (zb, zt) = crown.z_range();
         // On the stem axis rc = 0 and φ = 0.
         let at = |chi: f64, rc: f64, phi: f64| {
@@ -665,7 +757,7 @@ mod tests {
 
     #[test]
     fn crown_span_is_the_cylinder_interval() {
-        let crown = pine().crown(0.3);
+        let crown = pine().crown(&FoliageSettings::specification());
         let r = crown.max_radius_m();
         let ray = Ray::new(DVec3::new(10.0, 20.0, 100.0), -DVec3::Z);
         let (a, b) = crown.span(&ray, 0.0, 1e9).unwrap();

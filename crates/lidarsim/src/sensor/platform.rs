@@ -191,6 +191,16 @@ pub struct LineFrame {
     heading_rad: f64,
 }
 
+/// The settings of turbulence drift (`[platform] drift_m`,
+/// `drift_period_s`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DriftConfig {
+    /// Peak lateral and vertical drift, m.
+    pub amplitude_m: [f64; 2],
+    /// The longest period, s.
+    pub period_s: f64,
+}
+
 /// Slow drift of the aircraft off its planned line (turbulence): lateral
 /// and vertical offsets as sums of three long-period sinusoids with seeded
 /// phases, weighted 1, 1/2, 1/3 and scaled to the peak amplitudes.

@@ -16,7 +16,6 @@ mod pulse;
 mod scratch;
 mod truth;
 
-use std::io;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -35,18 +34,12 @@ use crate::survey::{ScannerSettings, Survey};
 use crate::waveform::Receiver;
 use crate::world::World;
 pub use executor::{Executor, InOrder};
-pub use scratch::Scratch;
+pub use scratch::PulseDetail;
+use scratch::Scratch;
 pub use truth::ReturnSource;
 
 /// ASPRS class of an echo no surface contributed to (receiver noise).
 pub const NOISE_CLASS: u8 = 7;
-
-/// [`PointRecord::component`] of an echo from a surface.
-pub const COMPONENT_SURFACE: u8 = 0;
-/// [`PointRecord::component`] of an echo from foliage in a crown.
-pub const COMPONENT_FOLIAGE: u8 = 1;
-/// [`PointRecord::component`] of an echo from a trunk.
-pub const COMPONENT_TRUNK: u8 = 2;
 
 /// Pulses per parallel work unit.
 pub const BLOCK_PULSES: u64 = 2048;
@@ -211,17 +204,16 @@ impl<'a> Simulator<'a> {
         line.start_time_s + k as f64 / self.survey.scanner.prf_hz
     }
 
-    /// Simulates pulses `[k0, k1)` of `line`.
-    pub fn simulate_block(
-        &self,
-        line: &FlightLine,
-        k0: u64,
-        k1: u64,
-        scratch: &mut Scratch,
-    ) -> (Vec<PointRecord>, RunCounts) {
+    /// Simulates pulse `k` of `line` on its own (the pulse of a run: every
+    /// random number of a pulse is keyed by the pulse) and keeps what it
+    /// left: its waveform, echoes, sub-ray returns and points.
+    pub fn replay(&self, line: &FlightLine, k: u64) -> PulseDetail {
+        let mut scratch = Scratch::default();
         let mut points = Vec::new();
-        let counts = self.simulate_block_recording(line, k0, k1, scratch, &mut points, None);
-        (points, counts)
+        let emitted = self
+            .simulate_pulse(line, k, &mut scratch, &mut points)
+            .is_some();
+        scratch.detail(emitted, points)
     }
 
     /// Simulates pulses `[k0, k1)` of `line` into `points`; with
@@ -233,7 +225,7 @@ impl<'a> Simulator<'a> {
     // Kept out of line: profiles (scripts/profile_bench.sh) count the
     // instructions under it, whatever the inlining around it.
     #[inline(never)]
-    pub fn simulate_block_recording(
+    pub(crate) fn simulate_block_recording(
         &self,
         line: &FlightLine,
         k0: u64,
@@ -286,12 +278,12 @@ impl<'a> Simulator<'a> {
     /// thread runs everything in turn on the caller.
     /// `progress` is called with the number of pulses done so far.
     /// The sinks are not finished here.
-    pub fn run(
+    pub fn run<E>(
         &self,
         threads: usize,
-        sinks: &mut [&mut (dyn PointSink + 'static)],
+        sinks: &mut [&mut (dyn PointSink<Error = E> + 'static)],
         progress: &(dyn Fn(u64) + Sync),
-    ) -> io::Result<RunCounts> {
+    ) -> Result<RunCounts, E> {
         self.run_from(threads, sinks, progress, &RunControl::default())
             .map(|o| o.counts)
     }
@@ -301,20 +293,23 @@ impl<'a> Simulator<'a> {
     /// block a thread takes; the blocks already simulated are written
     /// first, as far as they follow each other).
     /// The counts are those of the pulses simulated by this call; the
-    /// outcome says where it stopped, if it did.
-    pub fn run_from(
+    /// outcome says where it stopped, if it did. The first error of a
+    /// sink stops the run and is returned.
+    pub fn run_from<E>(
         &self,
         threads: usize,
-        sinks: &mut [&mut (dyn PointSink + 'static)],
+        sinks: &mut [&mut (dyn PointSink<Error = E> + 'static)],
         progress: &(dyn Fn(u64) + Sync),
         control: &RunControl<'_>,
-    ) -> io::Result<RunOutcome> {
-        let threads = threads.max(1);
-        // The blocks to simulate, in output order, within the pulse budget
-        // (a block is taken while fewer pulses than the budget precede it).
-        let mut jobs: Vec<(usize, u64, u64)> = Vec::new();
-        let mut budget_end = None;
-        let mut sent = 0u64;
+    ) -> Result<RunOutcome, E> {
+        let blocks = self.blocks(control);
+        self.run_jobs(blocks, threads.max(1), sinks, progress, control)
+    }
+
+    /// The blocks to simulate, in output order, within the pulse budget
+    /// (a block is taken while fewer pulses than the budget precede it),
+    /// and where the budget ends them, if it does.
+    fn blocks(&self, control: &RunControl<'_>) -> (Vec<BlockJob>, Option<PulsePosition>) {
         let whole: Vec<parts::PulseRange> = match control.only {
             Some(_) => Vec::new(),
             None => self
@@ -329,6 +324,9 @@ impl<'a> Simulator<'a> {
                 .collect(),
         };
         let ranges = control.only.unwrap_or(&whole);
+        let mut jobs = Vec::new();
+        let mut budget_end = None;
+        let mut sent = 0u64;
         'lines: for r in ranges {
             let (l, n) = (
                 r.line,
@@ -348,11 +346,29 @@ impl<'a> Simulator<'a> {
                     break 'lines;
                 }
                 let k1 = (k + BLOCK_PULSES).min(n);
-                jobs.push((l, k, k1));
+                jobs.push(BlockJob {
+                    line: l,
+                    start: k,
+                    end: k1,
+                });
                 sent += k1 - k;
                 k = k1;
             }
         }
+        (jobs, budget_end)
+    }
+
+    /// Runs `jobs` in order into `sinks` (see [`Simulator::run_from`]);
+    /// returns where the run stopped early, if it did (`budget_end` when
+    /// every job ran).
+    fn run_jobs<E>(
+        &self,
+        (jobs, budget_end): (Vec<BlockJob>, Option<PulsePosition>),
+        threads: usize,
+        sinks: &mut [&mut (dyn PointSink<Error = E> + 'static)],
+        progress: &(dyn Fn(u64) + Sync),
+        control: &RunControl<'_>,
+    ) -> Result<RunOutcome, E> {
         let stopped = || control.stop.is_some_and(|s| s.load(Ordering::SeqCst));
         // Blocks in order to every sink, at most 4 per thread ahead of the
         // writer (executor.rs).
@@ -378,7 +394,7 @@ impl<'a> Simulator<'a> {
             jobs.len(),
             Scratch::default,
             |j, scratch| {
-                let (l, k0, k1) = jobs[j];
+                let BlockJob { line, start, end } = jobs[j];
                 let mut block: Block = lock(&spare).pop().unwrap_or_default();
                 let Block {
                     points,
@@ -386,8 +402,14 @@ impl<'a> Simulator<'a> {
                     waves,
                 } = &mut block;
                 let record = self.record_waveforms.then_some(waves);
-                *counts =
-                    self.simulate_block_recording(&self.lines[l], k0, k1, scratch, points, record);
+                *counts = self.simulate_block_recording(
+                    &self.lines[line],
+                    start,
+                    end,
+                    scratch,
+                    points,
+                    record,
+                );
                 block
             },
             &mut writer,
@@ -395,7 +417,10 @@ impl<'a> Simulator<'a> {
         // Stopped early when blocks remain unwritten; a stop requested
         // after the last block changes nothing.
         let stopped_at = match jobs.get(done) {
-            Some(&(l, k0, _)) => Some(PulsePosition { line: l, pulse: k0 }),
+            Some(job) => Some(PulsePosition {
+                line: job.line,
+                pulse: job.start,
+            }),
             None => budget_end,
         };
         Ok(RunOutcome {
@@ -403,6 +428,15 @@ impl<'a> Simulator<'a> {
             stopped_at,
         })
     }
+}
+
+/// A block of pulses to simulate: pulses `start..end` of flight line
+/// `line` (its index).
+#[derive(Clone, Copy, Debug)]
+struct BlockJob {
+    line: usize,
+    start: u64,
+    end: u64,
 }
 
 /// The points, counts and waveforms of one block of pulses.
@@ -414,18 +448,18 @@ struct Block {
 }
 
 /// Writes blocks in pulse order to every sink, counting them.
-struct Writer<'s, 'p> {
-    sinks: &'s mut [&'p mut (dyn PointSink + 'static)],
+struct Writer<'s, 'p, E> {
+    sinks: &'s mut [&'p mut (dyn PointSink<Error = E> + 'static)],
     total: RunCounts,
     progress: &'s (dyn Fn(u64) + Sync),
     /// Written blocks, for the next jobs to fill again.
     spare: &'s Mutex<Vec<Block>>,
 }
 
-impl InOrder<Block> for Writer<'_, '_> {
-    type Error = io::Error;
+impl<E> InOrder<Block> for Writer<'_, '_, E> {
+    type Error = E;
 
-    fn take(&mut self, _: usize, block: Block) -> io::Result<()> {
+    fn take(&mut self, _: usize, block: Block) -> Result<(), E> {
         for sink in self.sinks.iter_mut() {
             sink.write_block(&block.points, &block.waves)?;
         }
@@ -482,10 +516,12 @@ pub struct RunOutcome {
 /// Simulates a whole survey into memory on `threads` threads: its world
 /// built, every pulse, the points in pulse order. For tests and small
 /// surveys; [`crate::run::run_to_dir`] streams to files instead.
-pub fn simulate_to_memory(survey: &Survey, threads: usize) -> io::Result<Vec<PointRecord>> {
-    let world = World::build(survey)
-        .map_err(|e| io::Error::new(io::ErrorKind::InvalidData, e.to_string()))?;
-    simulate_world_to_memory(survey, &world, threads)
+pub fn simulate_to_memory(
+    survey: &Survey,
+    threads: usize,
+) -> Result<Vec<PointRecord>, crate::survey::SurveyError> {
+    let world = World::build(survey)?;
+    Ok(simulate_world_to_memory(survey, &world, threads))
 }
 
 /// Simulates a survey over a world already built (its lines perhaps
@@ -495,11 +531,11 @@ pub fn simulate_world_to_memory(
     survey: &Survey,
     world: &World,
     threads: usize,
-) -> io::Result<Vec<PointRecord>> {
+) -> Vec<PointRecord> {
     let sim = Simulator::new(survey, world);
     let mut sink = crate::output::MemorySink::default();
-    sim.run(threads, &mut [&mut sink], &|_| {})?;
-    Ok(sink.points)
+    let Ok(_) = sim.run(threads, &mut [&mut sink], &|_| {});
+    sink.points
 }
 
 /// Wall-clock timing helper for summaries.

@@ -14,14 +14,14 @@
 //! Random streams are keyed by pulse and purpose, so each stage creates
 //! its streams only when it first needs them and gets the same numbers.
 
+use super::NOISE_CLASS;
 use super::Simulator;
 use super::scratch::Scratch;
 use super::truth::{ReturnSource, dominant_surface};
-use super::{COMPONENT_FOLIAGE, COMPONENT_SURFACE, COMPONENT_TRUNK, NOISE_CLASS};
 use crate::accel::{Hit, PulseTrace};
 use crate::canopy::Fate;
 use crate::geometry::{DMat3, DVec3, Ray, SCANNER_TO_LEVEL_NORTH};
-use crate::output::{NO_OBJECT, PointRecord};
+use crate::output::{Component, PointRecord};
 use crate::radiometry::surface_return;
 use crate::rng::{Purpose, Stream};
 use crate::scene::{MEDIUM_VEGETATION_MAX_M, Shape, SurfaceClass};
@@ -31,6 +31,28 @@ use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
 use crate::waveform::Return;
 
+/// The channel of a multi-channel head that fired a pulse.
+#[derive(Clone, Copy, Debug)]
+struct Channel {
+    /// Its number, from 0.
+    index: u8,
+    /// Its mounting on the head; `None` for a single straight channel.
+    mount: Option<DMat3>,
+}
+
+impl Channel {
+    /// A frame or direction of the deflector turned by the mounting.
+    fn turn<T>(&self, deflected: T) -> T
+    where
+        DMat3: std::ops::Mul<T, Output = T>,
+    {
+        match self.mount {
+            Some(mount) => mount * deflected,
+            None => deflected,
+        }
+    }
+}
+
 /// Where, when and in which direction a pulse leaves the scanner.
 struct Emission {
     /// Time since the line's start, s.
@@ -39,9 +61,8 @@ struct Emission {
     t: f64,
     /// The true pose of the platform.
     pose: Pose,
-    /// The channel that fired, and its mounting (`None`: a single
-    /// straight channel).
-    channel: (u8, Option<DMat3>),
+    /// The channel that fired.
+    channel: Channel,
     /// Beam direction in the scanner frame, the mounting included.
     beam: DVec3,
     /// Body-to-world rotation of the true attitude.
@@ -107,7 +128,7 @@ impl Simulator<'_> {
     /// Simulates pulse `k` of `line`, appending its points to `out`.
     /// Returns the number of echoes, or `None` when no pulse leaves at
     /// this tick (a polygon facet looking outside the field of view).
-    pub fn simulate_pulse(
+    pub(crate) fn simulate_pulse(
         &self,
         line: &FlightLine,
         k: u64,
@@ -121,7 +142,7 @@ impl Simulator<'_> {
             scratch.echoes.clear();
             return None;
         };
-        let c = usize::from(em.channel.0);
+        let c = usize::from(em.channel.index);
         let pattern = self.beams[c.min(self.beams.len() - 1)].for_pulse(|| stream(Purpose::Beam));
         let sampling = self.cast(&em, pattern, scratch);
         self.gather_returns(&em, pattern, sampling, scratch, &stream);
@@ -161,11 +182,11 @@ impl Simulator<'_> {
         // The deflection's third column is the beam direction; a channel of
         // a multi-channel head turns it by its mounting.
         let c = self.firing.channel_of(k);
-        let channel = (c as u8, self.mounts.get(c).copied());
-        let deflection = match channel.1 {
-            Some(mount) => mount * deflector.beam_frame(t),
-            None => deflector.beam_frame(t),
+        let channel = Channel {
+            index: c as u8,
+            mount: self.mounts.get(c).copied(),
         };
+        let deflection = channel.turn(deflector.beam_frame(t));
         Some(Emission {
             t_line,
             t,
@@ -253,7 +274,7 @@ impl Simulator<'_> {
         } = scratch;
         let scene = self.caster.scene();
         let reflectance =
-            &self.reflectance[usize::from(em.channel.0).min(self.reflectance.len() - 1)];
+            &self.reflectance[usize::from(em.channel.index).min(self.reflectance.len() - 1)];
         let rn = self.survey.receiver.reference_range_m;
         let mut speckle_rng: Option<Stream> = None;
         returns.clear();
@@ -408,10 +429,7 @@ impl Simulator<'_> {
                         .get_or_insert_with(|| stream(Purpose::Measurement))
                         .normal();
                 let observed = deflector.observed_direction(t, error);
-                match em.channel.1 {
-                    Some(mount) => mount * observed,
-                    None => observed,
-                }
+                em.channel.turn(observed)
             } else {
                 em.beam
             };
@@ -486,13 +504,13 @@ impl Simulator<'_> {
                         0.0
                     };
                     let component = match prim.shape {
-                        Shape::Crown(_) => COMPONENT_FOLIAGE,
-                        Shape::Trunk(_) => COMPONENT_TRUNK,
-                        _ => COMPONENT_SURFACE,
+                        Shape::Crown(_) => Component::Foliage,
+                        Shape::Trunk(_) => Component::Trunk,
+                        _ => Component::Surface,
                     };
-                    (prim.class.asprs_code(h), prim.object, component)
+                    (prim.class.asprs_code(h), Some(prim.object), component)
                 }
-                None => (NOISE_CLASS, NO_OBJECT, COMPONENT_SURFACE),
+                None => (NOISE_CLASS, None, Component::Surface),
             };
             out.push(PointRecord {
                 position_m: position,
@@ -508,7 +526,7 @@ impl Simulator<'_> {
                 return_number: (i + 1) as u8,
                 number_of_returns: n as u8,
                 scan_direction_positive,
-                channel: em.channel.0,
+                channel: em.channel.index,
                 edge_of_flight_line: edge,
                 scan_angle_deg,
                 classification,

@@ -8,11 +8,10 @@ use crate::detection::{DetectScratch, Echo};
 use crate::geometry::DVec3;
 use crate::waveform::{Return, Waveform};
 
-/// Reusable per-thread buffers of the per-pulse computation; after
-/// [`super::Simulator::simulate_pulse`] they hold that pulse's waveform,
-/// echoes and sub-ray returns.
+/// Reusable per-thread buffers of the per-pulse computation, filled again
+/// by every pulse ([`PulseDetail`] is what a pulse leaves for a caller).
 #[derive(Default)]
-pub struct Scratch {
+pub(crate) struct Scratch {
     /// Sub-ray directions in the world frame.
     pub(super) dirs: Vec<DVec3>,
     /// Their closest hits and the crowns on their way.
@@ -45,19 +44,38 @@ pub struct Scratch {
     pub(super) frames: FrameCache,
 }
 
+/// A pulse simulated on its own, with what a look at it needs
+/// ([`super::Simulator::replay`]): the report's sample waveforms, `lidarsim
+/// waveform`, Python's `Survey.waveform`.
+#[derive(Clone, Debug, Default)]
+pub struct PulseDetail {
+    /// Whether a pulse left at its tick (a polygon facet looking outside
+    /// the field of view emits none).
+    pub emitted: bool,
+    /// The received signal.
+    pub waveform: Waveform,
+    /// The detected echoes.
+    pub echoes: Vec<Echo>,
+    /// The sub-ray returns: range and power.
+    pub returns: Vec<Return>,
+    /// Its points, as a run writes them.
+    pub points: Vec<crate::output::PointRecord>,
+}
+
 impl Scratch {
-    /// The waveform of the last simulated pulse.
-    pub fn waveform(&self) -> &Waveform {
-        &self.waveform
-    }
-
-    /// The echoes of the last simulated pulse.
-    pub fn echoes(&self) -> &[Echo] {
-        &self.echoes
-    }
-
-    /// The sub-ray returns of the last simulated pulse.
-    pub fn returns(&self) -> &[Return] {
-        &self.returns
+    /// What the last pulse simulated with this scratch left in it, with its
+    /// points.
+    pub(super) fn detail(
+        &self,
+        emitted: bool,
+        points: Vec<crate::output::PointRecord>,
+    ) -> PulseDetail {
+        PulseDetail {
+            emitted,
+            waveform: self.waveform.clone(),
+            echoes: self.echoes.clone(),
+            returns: self.returns.clone(),
+            points,
+        }
     }
 }

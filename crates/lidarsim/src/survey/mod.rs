@@ -35,7 +35,7 @@ use crate::scene::Material;
 use crate::sensor::channel::Channel;
 use crate::sensor::deflector::Deflector;
 use crate::sensor::navigation::NavigationErrors;
-use crate::sensor::platform::{FlightLine, SwayConfig};
+use crate::sensor::platform::{DriftConfig, FlightLine, SwayConfig};
 use crate::waveform::ReceiverConfig;
 use check::Checker;
 use diagnostic::{Diagnose, diagnostics_in_file_order};
@@ -193,8 +193,8 @@ pub struct Survey {
     pub sway: Option<SwayConfig>,
     /// Time between the end of one line and the start of the next, s.
     pub turn_time_s: f64,
-    /// Peak lateral and vertical drift, m, and its period, s.
-    pub drift: Option<([f64; 2], f64)>,
+    /// Turbulence drift when it is on.
+    pub drift: Option<DriftConfig>,
     /// Where the flight lines come from.
     pub line_spec: LineSpec,
     /// How sub-rays march through tree crowns.
@@ -331,7 +331,7 @@ impl Survey {
         let navigation = check::navigation::check_navigation(&mut c, &raw);
         let output = check::output::output(&mut c, &raw);
         let materials = check::scene::materials(&mut c, &raw);
-        let (canopy, whorl_spacing_m) = check::vegetation::vegetation(&mut c, &raw);
+        let (canopy, foliage) = check::vegetation::vegetation(&mut c, &raw);
         let scene_spec = SceneSpec {
             polygons: check::scene::polygons(&mut c, &raw, &materials),
             meshes: check::scene::meshes(&mut c, &raw, &materials, &base),
@@ -340,7 +340,7 @@ impl Survey {
             trees: check::vegetation::trees(&mut c, &raw, seed),
             forests: check::vegetation::forests(&mut c, &raw, seed),
             tree_tables: check::vegetation::tree_tables(&mut c, &raw, &base, seed),
-            whorl_spacing_m,
+            foliage,
         };
         let mut warnings = sensor.warnings;
         let line_spec = check::lines::lines(

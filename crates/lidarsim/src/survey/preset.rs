@@ -47,8 +47,9 @@ pub const PRESETS: &[Preset] = &[
         id: "leica_als50_ii",
         name: "Leica ALS50-II",
         source: "NERC-ARF sensor notes (Leica ALS50-II): 75° FOV, 0.22 mrad, 1064 nm, 4 returns, \
-                 up to 150 kHz; HELIOS++ scanners_als.xml: 0–90 Hz scan",
-        note: "",
+                 returns at least 2.7 m apart, a 4 or 9 ns pulse, up to 150 kHz; HELIOS++ \
+                 scanners_als.xml: 0–90 Hz scan",
+        note: "which of its 4 and 9 ns pulses goes with which pulse rate (4 ns is taken)",
         keys: r#"deflector = "oscillating"
 mirror = "triangle"
 prf_hz = 150000
@@ -57,7 +58,9 @@ scan_angle_deg = 20
 divergence_mrad = 0.22
 wavelength_nm = 1064
 pulse_fwhm_ns = 4
-max_returns = 4"#,
+max_returns = 4
+echo_detection = "discrete"
+min_return_separation_m = 2.7"#,
         prf_hz: &[20_000.0, 150_000.0],
         prf_range: true,
         scan_frequency_hz: &[0.0, 90.0],
@@ -68,7 +71,8 @@ max_returns = 4"#,
         name: "Teledyne Optech Galaxy",
         source: "HELIOS++ scanners_als.xml (optech_galaxy): 35–550 kHz, 0–120 Hz, ±30°, \
                  1064 nm, 8 ns, 8 returns; divergence 0.25 mrad (Optech datasheet)",
-        note: "the datasheet's 0.25 mrad divergence is taken as the 1/e² angle (HELIOS++ uses \
+        note: "its least separation of returns is not published: a discrete receiver's default \
+               (2.7 m); the datasheet's 0.25 mrad divergence is taken as the 1/e² angle (HELIOS++ uses \
                0.354 mrad, √2 × 0.25)",
         keys: r#"deflector = "oscillating"
 mirror = "triangle"
@@ -78,7 +82,8 @@ scan_angle_deg = 25
 divergence_mrad = 0.25
 wavelength_nm = 1064
 pulse_fwhm_ns = 8
-max_returns = 8"#,
+max_returns = 8
+echo_detection = "discrete""#,
         prf_hz: &[35_000.0, 550_000.0],
         prf_range: true,
         scan_frequency_hz: &[0.0, 120.0],
@@ -99,7 +104,8 @@ scan_angle_deg = 30
 divergence_mrad = 0.25
 wavelength_nm = 1064
 pulse_fwhm_ns = 4
-max_returns = 15"#,
+max_returns = 15
+echo_detection = "waveform""#,
         prf_hz: &[100_000.0, 200_000.0, 300_000.0, 400_000.0],
         prf_range: false,
         scan_frequency_hz: &[10.0, 200.0],
@@ -119,7 +125,8 @@ scan_angle_deg = 30
 divergence_mrad = 0.25
 wavelength_nm = 1064
 pulse_fwhm_ns = 4
-max_returns = 5"#,
+max_returns = 5
+echo_detection = "waveform""#,
         prf_hz: &[
             150_000.0,
             250_000.0,
@@ -149,6 +156,7 @@ divergence_mrad = 0.25
 wavelength_nm = 1064
 pulse_fwhm_ns = 4
 max_returns = 5
+echo_detection = "waveform"
 
 [[channels]]
 along_tilt_deg = 14
@@ -182,7 +190,8 @@ scan_angle_deg = 165
 divergence_mrad = 0.5
 wavelength_nm = 1064
 pulse_fwhm_ns = 4
-max_returns = 4"#,
+max_returns = 4
+echo_detection = "waveform""#,
         prf_hz: &[
             50_000.0, 100_000.0, 200_000.0, 300_000.0, 380_000.0, 550_000.0,
         ],
@@ -204,7 +213,8 @@ scan_angle_deg = 20
 divergence_mrad = 0.7
 wavelength_nm = 532
 pulse_fwhm_ns = 2
-max_returns = 9"#,
+max_returns = 9
+echo_detection = "waveform""#,
         prf_hz: &[200_000.0, 400_000.0, 550_000.0, 700_000.0],
         prf_range: false,
         scan_frequency_hz: &[30.0, 80.0],
@@ -227,7 +237,8 @@ divergence_mrad = 0.89
 divergence_along_mrad = 8.3
 wavelength_nm = 905
 pulse_fwhm_ns = 4
-max_returns = 2"#,
+max_returns = 2
+echo_detection = "discrete""#,
         prf_hz: &[100_000.0],
         prf_range: false,
         scan_frequency_hz: &[],
@@ -251,7 +262,8 @@ divergence_mrad = 0.89
 divergence_along_mrad = 8.3
 wavelength_nm = 905
 pulse_fwhm_ns = 4
-max_returns = 3"#,
+max_returns = 3
+echo_detection = "discrete""#,
         prf_hz: &[240_000.0],
         prf_range: false,
         scan_frequency_hz: &[],

@@ -118,6 +118,10 @@ pub struct RawScanner {
     /// Which echoes are kept beyond `max_returns`: `"first-and-last"`
     /// (default) or `"first"`.
     pub return_selection: Option<String>,
+    /// How echoes become returns: `"discrete"` (default) or `"waveform"`.
+    pub echo_detection: Option<String>,
+    /// Least range between two returns of a pulse, m.
+    pub min_return_separation_m: Option<f64>,
     pub min_range_m: Option<f64>,
     pub max_range_m: Option<f64>,
     pub reference_range_m: Option<f64>,
@@ -293,6 +297,15 @@ pub struct RawPointCloud {
 #[allow(missing_docs)]
 pub struct RawVegetation {
     pub step_m: Option<f64>,
+    /// How plant area fills the crowns: `"physical"` (default) or
+    /// `"specification"`.
+    pub foliage: Option<String>,
+    /// Edge of the physical model's clump cells, m.
+    pub clump_m: Option<f64>,
+    /// Share of the physical model's clump cells that hold foliage.
+    pub clump_fraction: Option<f64>,
+    /// Depth of the physical model's foliated shell, m.
+    pub shell_m: Option<f64>,
     pub whorl_spacing_m: Option<f64>,
     pub partial_blocking: Option<f64>,
     /// How intercepting foliage returns a sub-ray: `"physical"` (default)

@@ -30,8 +30,8 @@ pub struct SceneSpec {
     pub forests: Vec<Option<ForestSpec>>,
     /// `[[tree_table]]` entries.
     pub tree_tables: Vec<TreeTableEntry>,
-    /// Vertical distance between branch whorls, m.
-    pub whorl_spacing_m: f64,
+    /// How crowns are filled (`[vegetation]`).
+    pub foliage: crate::scene::FoliageSettings,
 }
 
 /// A checked `[[polygon]]`.

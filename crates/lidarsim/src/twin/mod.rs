@@ -15,8 +15,6 @@ mod summary;
 pub mod trees;
 pub mod write;
 
-use std::path::PathBuf;
-
 use serde::Serialize;
 
 use crate::message::num;
@@ -115,13 +113,8 @@ pub enum TwinError {
         why: String,
     },
     /// Writing the survey's files failed.
-    #[error("{path}: {source}")]
-    Write {
-        /// The file or directory.
-        path: PathBuf,
-        /// The error.
-        source: std::io::Error,
-    },
+    #[error(transparent)]
+    Write(#[from] crate::output::WriteError),
     /// The survey written does not check (a bug: it is reported, not
     /// hidden).
     #[error("the twin's survey does not check: {0}")]

@@ -17,7 +17,7 @@ use serde::Serialize;
 
 use super::acquisition::combine::{Deflector, Flight};
 use super::{Twin, TwinError};
-use crate::output::AtomicFile;
+use crate::output::{AtFile, AtomicFile, WriteCause, WriteError, write_atomic};
 use crate::owned::OwnFiles;
 use crate::survey::raw::{
     RawFlightLine, RawMaterial, RawOutput, RawPlan, RawPolygon, RawScanner, RawSurvey, RawTerrain,
@@ -94,8 +94,7 @@ pub fn origin_of(twin: &Twin) -> [f64; 3] {
 
 /// Writes `twin`'s files into `dir`; returns the survey's path.
 pub fn write_twin(twin: &Twin, dir: &Path, overwrite: bool) -> Result<PathBuf, TwinError> {
-    let failed = |(path, source)| TwinError::Write { path, source };
-    OWN.claim(dir, overwrite).map_err(failed)?;
+    OWN.claim(dir, overwrite)?;
     let origin = origin_of(twin);
     let flat = twin.ground.flat;
     let survey = survey_text(twin, origin)?;
@@ -106,29 +105,23 @@ pub fn write_twin(twin: &Twin, dir: &Path, overwrite: bool) -> Result<PathBuf, T
         let partial = AtomicFile::partial_of(&path);
         crate::io::export::write_geotiff(&partial, &twin.ground.dtm.to_height_grid())
             .and_then(|()| std::fs::rename(&partial, &path))
-            .map_err(|source| TwinError::Write { path, source })?;
+            .at(&path)?;
     }
-    write(&dir.join("trees.csv"), trees_csv(twin).as_bytes())?;
-    write(&survey_path, survey.as_bytes())?;
-    write(&dir.join("twin.json"), report_json(twin, origin).as_bytes())?;
-    OWN.mark(dir).map_err(failed)?;
+    write_atomic(&dir.join("trees.csv"), trees_csv(twin).as_bytes())?;
+    write_atomic(&survey_path, survey.as_bytes())?;
+    write_atomic(&dir.join("twin.json"), report_json(twin, origin).as_bytes())?;
+    OWN.mark(dir)?;
     Ok(survey_path)
-}
-
-/// Writes a small file whole or not at all.
-fn write(path: &Path, bytes: &[u8]) -> Result<(), TwinError> {
-    crate::output::write_atomic(path, bytes).map_err(|source| TwinError::Write {
-        path: path.to_path_buf(),
-        source,
-    })
 }
 
 /// `survey.toml`.
 fn survey_text(twin: &Twin, origin: [f64; 3]) -> Result<String, TwinError> {
     let raw = raw_survey(twin, origin);
-    let body = toml::to_string(&raw).map_err(|e| TwinError::Write {
-        path: "survey.toml".into(),
-        source: std::io::Error::other(e.to_string()),
+    let body = toml::to_string(&raw).map_err(|e| {
+        WriteError::new(
+            Path::new("survey.toml"),
+            WriteCause::Unsupported(e.to_string()),
+        )
     })?;
     Ok(format!(
         "# The twin of {}, written by lidarsim twin {}.\n# What was read from the scan, and \

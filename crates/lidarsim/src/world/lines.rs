@@ -83,7 +83,7 @@ pub(super) fn flight_lines(
             nav_errors: LineErrors::default(),
             drift: survey
                 .drift
-                .map(|(d, period)| Drift::new(d, period, seed, index)),
+                .map(|d| Drift::new(d.amplitude_m, d.period_s, seed, index)),
             track: None,
         };
         t += line.duration_s() + survey.turn_time_s;

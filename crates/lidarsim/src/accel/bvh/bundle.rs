@@ -175,44 +175,12 @@ impl Bvh {
             break;
         }
         out.stack = stack;
-        // Triangle hits carry their normal, already facing the ray, from the
-        // test; other sub-rays mostly hit the same flat primitive, whose
-        // normal is computed once.
         if normals_missing {
-            let mut flat: Option<(u32, DVec3)> = None;
-            for (dir, b) in dirs.iter().zip(best.iter_mut()) {
-                let Some(p) = b.prim() else {
-                    continue;
-                };
-                if !b.normal.x.is_nan() {
-                    continue;
-                }
-                let n = match flat {
-                    Some((q, n)) if q == p => n,
-                    _ => {
-                        let prim = &self.scene.primitives[p as usize];
-                        let n = prim.normal_at(origin + *dir * b.t);
-                        if prim.is_flat() {
-                            flat = Some((p, n));
-                        }
-                        n
-                    }
-                };
-                b.normal = if n.dot(*dir) > 0.0 { -n } else { n };
-            }
+            self.fill_normals(origin, dirs, &mut best);
         }
-        // The volumes reached: those the bundle may cross before its
-        // farthest hit.
         if !volumes.is_empty() {
-            let t_far = best
-                .iter()
-                .fold(t_min, |m, b| if b.t > m { b.t } else { m });
-            let prims = &self.scene.primitives;
-            volumes.retain(|&v| {
-                prims[v as usize]
-                    .bounds_cylinder()
-                    .is_none_or(|c| c.may_meet_cone(origin, axis, spread, t_min, t_far))
-            });
+            let cone = (axis, spread);
+            self.keep_volumes_reached(origin, cone, t_min, &best, &mut volumes);
         }
         // The unseen: each once, none that some sub-ray hit in the end.
         if !unseen.is_empty() {
@@ -223,6 +191,55 @@ impl Bvh {
         out.hits = best;
         out.volumes = volumes;
         out.unseen = unseen;
+    }
+
+    /// The normals of the hits recorded without one, facing the ray.
+    /// Triangle hits carry their normal, already facing the ray, from the
+    /// test; other sub-rays mostly hit the same flat primitive, whose
+    /// normal is computed once.
+    fn fill_normals(&self, origin: DVec3, dirs: &[DVec3], best: &mut [Nearest]) {
+        let mut flat: Option<(u32, DVec3)> = None;
+        for (dir, b) in dirs.iter().zip(best.iter_mut()) {
+            let Some(p) = b.prim() else {
+                continue;
+            };
+            if !b.normal.x.is_nan() {
+                continue;
+            }
+            let n = match flat {
+                Some((q, n)) if q == p => n,
+                _ => {
+                    let prim = &self.scene.primitives[p as usize];
+                    let n = prim.normal_at(origin + *dir * b.t);
+                    if prim.is_flat() {
+                        flat = Some((p, n));
+                    }
+                    n
+                }
+            };
+            b.normal = if n.dot(*dir) > 0.0 { -n } else { n };
+        }
+    }
+
+    /// Keeps of `volumes` those the bundle (the cone of `(axis, spread)`
+    /// from `origin`) may cross before its farthest hit in `best`.
+    fn keep_volumes_reached(
+        &self,
+        origin: DVec3,
+        (axis, spread): (DVec3, f64),
+        t_min: f64,
+        best: &[Nearest],
+        volumes: &mut Vec<u32>,
+    ) {
+        let t_far = best
+            .iter()
+            .fold(t_min, |m, b| if b.t > m { b.t } else { m });
+        let prims = &self.scene.primitives;
+        volumes.retain(|&v| {
+            prims[v as usize]
+                .bounds_cylinder()
+                .is_none_or(|c| c.may_meet_cone(origin, axis, spread, t_min, t_far))
+        });
     }
 }
 

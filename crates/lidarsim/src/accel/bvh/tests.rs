@@ -165,7 +165,11 @@ fn scene_with_trees(seed: u64) -> Scene {
             15.0 + 10.0 * s.uniform(),
             6.0,
         );
-        scene.add_tree(&spec, 0.3, format!("tree {k}"));
+        scene.add_tree(
+            &spec,
+            &crate::scene::FoliageSettings::default(),
+            format!("tree {k}"),
+        );
     }
     scene
 }

@@ -68,6 +68,22 @@ struct Row {
     cell: Cell,
 }
 
+/// The pulse's centre line and the sub-rays about it.
+#[derive(Clone, Copy, Debug)]
+struct CentreLine {
+    /// The mean horizontal drift per metre of height, x and y.
+    cx: f64,
+    cy: f64,
+    /// The farthest a sub-ray's drift strays from the mean, a little
+    /// grown.
+    spread: f64,
+    /// The highest `d_z·t_start` and the lowest `d_z·t_stop` of the
+    /// sub-rays: the heights, relative to the origin, they are open
+    /// between.
+    top_max: f64,
+    bottom_min: f64,
+}
+
 /// The sub-rays of one pulse and the working storage of their march
 /// through the crowns, reused from pulse to pulse.
 #[derive(Clone, Debug, Default)]
@@ -164,62 +180,22 @@ impl PulseMarch {
         rng: &mut Stream,
     ) {
         let n = self.dirs.len();
-        // The pulse's centre line: the mean horizontal drift per metre of
-        // height; the levels' spacing from its mean steepness.
+        // The levels' spacing from the pulse's mean steepness.
         let mean_dz = self.dirs.iter().map(|d| d.z).sum::<f64>() / n as f64;
         let level_step = config.step_m * -mean_dz;
-        // Each sub-ray's horizontal drift per metre of height.
-        self.drifts.clear();
-        self.drifts
-            .extend(self.dirs.iter().map(|d| (d.x / d.z, d.y / d.z)));
-        let (mut cx, mut cy) = (0.0, 0.0);
-        for &(rx, ry) in &self.drifts {
-            cx += rx;
-            cy += ry;
-        }
-        let (cx, cy) = (cx / n as f64, cy / n as f64);
-        let mut spread = 0.0f64;
-        let (mut top_max, mut bottom_min) = (f64::NEG_INFINITY, f64::INFINITY);
-        for i in 0..n {
-            let d = self.dirs[i];
-            let (rx, ry) = self.drifts[i];
-            let (sx, sy) = (rx - cx, ry - cy);
-            spread = spread.max((sx * sx + sy * sy).sqrt());
-            top_max = top_max.max(d.z * self.t_start[i]);
-            bottom_min = bottom_min.min(d.z * self.t_stop[i]);
-        }
-        // The f32 drifts differ from these by a relative 1e-7.
-        let spread = spread * (1.0 + 1e-6) + 1e-9;
-
-        // The crowns the pulse meets, highest top first, each between the
-        // heights where the pulse can reach its bounding cylinder: where the
-        // centre line `o + s·(−c_x, −c_y, −1)` comes within `spread·s` of it.
-        let line = Ray {
-            origin: o,
-            dir: DVec3::new(-cx, -cy, -1.0),
-        };
-        let depth_max = -bottom_min;
-        self.met.clear();
-        for &prim in volumes {
-            let crown = crown_of(scene, prim);
-            let reach = crown.bounds_cylinder().grown(spread * depth_max);
-            let Some((s0, s1)) = reach.span(&line, -top_max, depth_max) else {
-                continue;
-            };
-            let (z_base, z_top) = crown.z_range();
-            let (z_base, z_top) = (z_base.max(o.z - s1), z_top.min(o.z - s0));
-            if z_base < z_top {
-                self.met.push(Met {
-                    prim,
-                    profile: crown.profile(),
-                    z_top,
-                    z_base,
-                });
-            }
-        }
+        let centre = self.centre_line();
+        self.meet_crowns(scene, o, volumes, &centre);
         if self.met.is_empty() {
             return;
         }
+        let CentreLine {
+            cx,
+            cy,
+            spread,
+            top_max,
+            bottom_min,
+        } = centre;
+        // The crowns met, highest top first.
         self.met
             .sort_by(|a, b| b.z_top.total_cmp(&a.z_top).then(a.prim.cmp(&b.prim)));
         let phase = rng.uniform();
@@ -341,6 +317,71 @@ impl PulseMarch {
         for (fate, &kept) in self.fates.iter_mut().zip(&self.transmission) {
             if let Fate::Passed { transmission } = fate {
                 *transmission = kept;
+            }
+        }
+    }
+
+    /// The pulse's centre line (the mean horizontal drift per metre of
+    /// height) and how far the sub-rays stray from it, each sub-ray's
+    /// drift kept in `drifts`.
+    fn centre_line(&mut self) -> CentreLine {
+        let n = self.dirs.len();
+        // Each sub-ray's horizontal drift per metre of height.
+        self.drifts.clear();
+        self.drifts
+            .extend(self.dirs.iter().map(|d| (d.x / d.z, d.y / d.z)));
+        let (mut cx, mut cy) = (0.0, 0.0);
+        for &(rx, ry) in &self.drifts {
+            cx += rx;
+            cy += ry;
+        }
+        let (cx, cy) = (cx / n as f64, cy / n as f64);
+        let mut spread = 0.0f64;
+        let (mut top_max, mut bottom_min) = (f64::NEG_INFINITY, f64::INFINITY);
+        for i in 0..n {
+            let d = self.dirs[i];
+            let (rx, ry) = self.drifts[i];
+            let (sx, sy) = (rx - cx, ry - cy);
+            spread = spread.max((sx * sx + sy * sy).sqrt());
+            top_max = top_max.max(d.z * self.t_start[i]);
+            bottom_min = bottom_min.min(d.z * self.t_stop[i]);
+        }
+        CentreLine {
+            cx,
+            cy,
+            // The f32 drifts differ from these by a relative 1e-7.
+            spread: spread * (1.0 + 1e-6) + 1e-9,
+            top_max,
+            bottom_min,
+        }
+    }
+
+    /// The crowns among `volumes` the pulse from `o` meets, into `met`
+    /// (in the order of `volumes`), each between the heights where the
+    /// pulse can reach its bounding cylinder: where the centre line
+    /// `o + s·(−c_x, −c_y, −1)` comes within `spread·s` of it.
+    fn meet_crowns(&mut self, scene: &Scene, o: DVec3, volumes: &[u32], c: &CentreLine) {
+        let line = Ray {
+            origin: o,
+            dir: DVec3::new(-c.cx, -c.cy, -1.0),
+        };
+        let depth_max = -c.bottom_min;
+        self.met.clear();
+        for &prim in volumes {
+            let crown = crown_of(scene, prim);
+            let reach = crown.bounds_cylinder().grown(c.spread * depth_max);
+            let Some((s0, s1)) = reach.span(&line, -c.top_max, depth_max) else {
+                continue;
+            };
+            let (z_base, z_top) = crown.z_range();
+            let (z_base, z_top) = (z_base.max(o.z - s1), z_top.min(o.z - s0));
+            if z_base < z_top {
+                self.met.push(Met {
+                    prim,
+                    profile: crown.profile(),
+                    z_top,
+                    z_base,
+                });
             }
         }
     }

@@ -5,14 +5,11 @@
 //! ([`LasWriter::adopt`]), which checks every part against them and writes
 //! the file's own VLRs and, when finished, its header.
 
-use std::io::{self, Read, Seek, SeekFrom, Write};
+use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
-use super::{Body, HEADER_SIZE, LAS_WRITE_BYTES, LasSettings, LasWriter, tally};
-use crate::output::{AtomicFile, file_error};
-
-/// Offset of "offset to point data" (`u32`) in a LAS 1.4 header.
-const OFFSET_TO_POINTS_AT: usize = 96;
+use super::{Body, HEADER_SIZE, LAS_WRITE_BYTES, LasSettings, LasWriter, RawHeader, tally};
+use crate::output::{AtFile, AtomicFile, WriteCause, WriteError};
 
 /// Part files joined by a [`LasJoin`], not yet checked: the first file whole,
 /// then the point records of each later one.
@@ -69,16 +66,13 @@ impl LasJoin {
     /// place with `take_first`, when the file system allows it: it is gone
     /// from its part then, and a failure later leaves the joined file
     /// behind under its `.partial` name), else its point records.
-    pub fn append(&mut self, part: &Path, take_first: bool) -> io::Result<()> {
-        let named = |e| file_error(part, e);
+    pub fn append(&mut self, part: &Path, take_first: bool) -> Result<(), WriteError> {
         let Some(joined) = self.joined.as_mut() else {
             if take_first {
                 signature(part)?;
                 let partial = AtomicFile::partial_of(&self.path);
                 if std::fs::rename(part, &partial).is_ok() {
-                    let len = std::fs::metadata(&partial)
-                        .map_err(|e| file_error(&partial, e))?
-                        .len();
+                    let len = std::fs::metadata(&partial).at(&partial)?.len();
                     self.joined = Some(JoinedLas {
                         file: AtomicFile::reopen(&self.path, len)?,
                         parts: vec![Joined {
@@ -100,17 +94,17 @@ impl LasJoin {
         };
         let (mut f, records) = signature(part)?;
         let start = if joined.parts.is_empty() { 0 } else { records };
-        f.seek(SeekFrom::Start(start)).map_err(named)?;
+        f.seek(SeekFrom::Start(start)).at(part)?;
         // An append reads one file and writes the other, and its error
         // does not say which: both are named.
-        let appended = joined.file.append_rest_of(&mut f).map_err(|e| {
-            named(io::Error::new(
-                e.kind(),
-                format!(
-                    "cannot append it to '{}': {e}",
-                    AtomicFile::partial_of(joined.file.path()).display()
-                ),
-            ))
+        let appended = joined.file.append_rest_of(&mut f).map_err(|cause| {
+            WriteError::new(
+                part,
+                WriteCause::Join {
+                    into: AtomicFile::partial_of(joined.file.path()),
+                    cause,
+                },
+            )
         })?;
         joined.len += appended;
         let copied = start + appended;
@@ -124,11 +118,11 @@ impl LasJoin {
 
     /// The joined file, for [`LasWriter::adopt`]; an error if no part was
     /// appended.
-    pub fn finish(self) -> io::Result<JoinedLas> {
+    pub fn finish(self) -> Result<JoinedLas, WriteError> {
         self.joined.ok_or_else(|| {
-            file_error(
+            WriteError::new(
                 &self.path,
-                io::Error::new(io::ErrorKind::InvalidInput, "no LAS file to join"),
+                WriteCause::Unsupported("no LAS file to join".into()),
             )
         })
     }
@@ -136,20 +130,16 @@ impl LasJoin {
 
 /// `part` opened, once its first bytes are a LAS header's, with the
 /// offset to its point records.
-fn signature(part: &Path) -> io::Result<(std::fs::File, u64)> {
-    let named = |e| file_error(part, e);
-    let mut f = std::fs::File::open(part).map_err(named)?;
+fn signature(part: &Path) -> Result<(std::fs::File, u64), WriteError> {
+    let mut f = std::fs::File::open(part).at(part)?;
     let mut header = [0u8; HEADER_SIZE as usize];
-    f.read_exact(&mut header).map_err(named)?;
+    f.read_exact(&mut header).at(part)?;
     if &header[..4] != b"LASF" {
-        return Err(named(io::Error::new(
-            io::ErrorKind::InvalidData,
-            "cannot append this file: it is not a LAS file",
-        )));
+        return Err(WriteError::mismatch(part, "append", "it is not a LAS file"));
     }
-    let at = OFFSET_TO_POINTS_AT;
-    let records = u32::from_le_bytes([header[at], header[at + 1], header[at + 2], header[at + 3]]);
-    Ok((f, u64::from(records)))
+    let header = RawHeader::parse(&header)
+        .map_err(|e| WriteError::mismatch(part, "append", e.to_string()))?;
+    Ok((f, u64::from(header.offset_to_points)))
 }
 
 impl LasWriter {
@@ -162,17 +152,17 @@ impl LasWriter {
     /// of each part. A part that fails is named in the error, and the
     /// joined file is removed (kept, under its `.partial` name, when the
     /// first part's file was moved to become it).
-    pub fn adopt(joined: JoinedLas, settings: LasSettings) -> io::Result<(Self, Vec<u64>)> {
+    pub fn adopt(joined: JoinedLas, settings: LasSettings) -> Result<(Self, Vec<u64>), WriteError> {
         let JoinedLas {
             mut file,
             parts,
             len,
         } = joined;
         if settings.compressed || settings.waveform.is_some() {
-            return Err(file.error(io::Error::new(
-                io::ErrorKind::Unsupported,
-                "only LAS files without waveforms are joined",
-            )));
+            return Err(WriteError::new(
+                file.path(),
+                WriteCause::Unsupported("only LAS files without waveforms are joined".into()),
+            ));
         }
         let mut count = 0u64;
         let mut by_return = [0u64; 15];
@@ -183,15 +173,12 @@ impl LasWriter {
             let t = tally::read(&part.header, &part.named, &settings, "append")?;
             let held = part.len;
             if t.file_len(&settings) != Some(held) {
-                return Err(file_error(
+                return Err(WriteError::mismatch(
                     &part.named,
-                    io::Error::new(
-                        io::ErrorKind::InvalidData,
-                        format!(
-                            "cannot append this file: its header counts {} points but it \
-                             holds {held} bytes",
-                            t.count
-                        ),
+                    "append",
+                    format!(
+                        "its header counts {} points but it holds {held} bytes",
+                        t.count
                     ),
                 ));
             }
@@ -212,16 +199,19 @@ impl LasWriter {
             .checked_mul(count)
             .and_then(|b| b.checked_add(offset_to_points));
         if want != Some(len) {
-            return Err(file.error(io::Error::new(
-                io::ErrorKind::InvalidData,
+            return Err(WriteError::mismatch(
+                file.path(),
+                "finish",
                 format!(
                     "the parts joined into {len} bytes, not the {} their headers count: \
                      did a part change while it was joined?",
                     want.map_or_else(|| "overflowing".to_string(), |b| b.to_string())
                 ),
-            )));
+            ));
         }
-        let vlrs = settings.vlrs()?;
+        let vlrs = settings
+            .vlrs()
+            .map_err(|cause| WriteError::new(file.path(), cause))?;
         let out = file.writer();
         let r = out
             .seek(SeekFrom::Start(u64::from(HEADER_SIZE)))

@@ -19,12 +19,14 @@ mod tally;
 mod vlr;
 mod wdp;
 
-use std::io::{self, BufWriter, Seek, SeekFrom, Write};
-use std::path::{Path, PathBuf};
+use std::io::{BufWriter, Seek, SeekFrom, Write};
+use std::path::Path;
 
 use laz::{LasZipCompressor, LazItemRecordBuilder, LazVlr};
 
-use super::{AtomicFile, OutFile, PointRecord, PointSink, WaveformBlock, file_error};
+use super::{
+    AtFile, AtomicFile, OutFile, PointRecord, PointSink, WaveformBlock, WriteCause, WriteError,
+};
 pub use header::{HEADER_SIZE_14, HeaderError, RawHeader};
 pub use join::{JoinedLas, LasJoin};
 use vlr::{ATTRIBUTE_FIELDS, ERROR_FIELDS, fixed_str};
@@ -44,7 +46,7 @@ pub const POINT_FORMAT_6_LEN: u16 = 30;
 /// packet (descriptor index u8, byte offset u64, packet size u32, return
 /// point waveform location f32, X(t), Y(t), Z(t) f32).
 pub const POINT_FORMAT_9_LEN: u16 = 59;
-const HEADER_SIZE: u16 = 375;
+const HEADER_SIZE: u16 = HEADER_SIZE_14;
 
 /// Fixed parts of the header chosen before the first point.
 #[derive(Clone, Debug, PartialEq)]
@@ -107,7 +109,10 @@ impl LasSettings {
     /// metres; `origin_m` is added first): `round((v − offset) / scale)`.
     /// Reading them back as `X · scale + offset` gives the file's
     /// coordinates.
-    pub fn quantize_point(&self, position_m: crate::geometry::DVec3) -> io::Result<[i32; 3]> {
+    pub fn quantize_point(
+        &self,
+        position_m: crate::geometry::DVec3,
+    ) -> Result<[i32; 3], WriteCause> {
         let o = self.origin_m;
         Ok([
             self.quantize(position_m.x + o[0], 0)?,
@@ -118,18 +123,16 @@ impl LasSettings {
 
     /// One output coordinate `v` (m, after `origin_m`) on `axis` as the
     /// stored integer; an error when it does not fit in an i32.
-    pub fn quantize(&self, v: f64, axis: usize) -> io::Result<i32> {
+    pub fn quantize(&self, v: f64, axis: usize) -> Result<i32, WriteCause> {
         let q = ((v - self.offset_m[axis]) / self.scale_m).round();
         if q.is_finite() && q >= i32::MIN as f64 && q <= i32::MAX as f64 {
             Ok(q as i32)
         } else {
-            Err(io::Error::new(
-                io::ErrorKind::InvalidData,
-                format!(
-                    "coordinate {v} m cannot be stored with offset {} m and scale {} m",
-                    self.offset_m[axis], self.scale_m
-                ),
-            ))
+            Err(WriteCause::Coordinate {
+                value: v,
+                offset: self.offset_m[axis],
+                scale: self.scale_m,
+            })
         }
     }
 
@@ -150,12 +153,12 @@ impl LasSettings {
 
     /// The LASzip description of the point record: point 14 (+ wave packet
     /// 14) + extra bytes, layered chunked compression.
-    fn laz_vlr(&self) -> io::Result<LazVlr> {
+    fn laz_vlr(&self) -> Result<LazVlr, WriteCause> {
         let items = LazItemRecordBuilder::default_for_point_format_id(
             self.point_format(),
             self.extra_bytes_len(),
         )
-        .map_err(io::Error::other)?;
+        .map_err(|e| WriteCause::Unsupported(e.to_string()))?;
         Ok(LazVlr::from_laz_items(items))
     }
 
@@ -200,7 +203,7 @@ impl LasWriter {
     /// Creates `path` (as `path.partial` until finished), and with
     /// waveforms the `.wdp` file of the same base name beside it (unless
     /// `waveform_file_shared`).
-    pub fn create(path: &Path, settings: LasSettings) -> io::Result<Self> {
+    pub fn create(path: &Path, settings: LasSettings) -> Result<Self, WriteError> {
         let file = AtomicFile::create(path)?;
         let wdp = match settings.waveform {
             None => None,
@@ -210,7 +213,7 @@ impl LasWriter {
                     None
                 } else {
                     let mut f = AtomicFile::create(&wdp_path)?;
-                    f.writer().write_all(&wdp_header(0))?;
+                    f.writer().write_all(&wdp_header(0)).at(&wdp_path)?;
                     Some(f)
                 };
                 Some(WdpFile {
@@ -234,14 +237,15 @@ impl LasWriter {
             buf: Vec::with_capacity(LAS_WRITE_BYTES + (1 << 16)),
         };
         let header = w.header();
-        let vlrs = w.settings.vlrs()?;
-        let named = |e| file_error(path, e);
-        w.file.writer().write_all(&header).map_err(named)?;
-        w.file.writer().write_all(&vlrs).map_err(named)?;
+        let refuse = |cause| WriteError::new(path, cause);
+        let vlrs = w.settings.vlrs().map_err(refuse)?;
+        w.file.writer().write_all(&header).at(path)?;
+        w.file.writer().write_all(&vlrs).at(path)?;
         if w.settings.compressed {
             let writer = w.file.take_writer();
-            let compressor =
-                LasZipCompressor::new(writer, w.settings.laz_vlr()?).map_err(io::Error::other)?;
+            let laz_vlr = w.settings.laz_vlr().map_err(refuse)?;
+            let compressor = LasZipCompressor::new(writer, laz_vlr)
+                .map_err(|e| WriteError::new(path, WriteCause::Unsupported(e.to_string())))?;
             w.body = Body::Laz(Box::new(compressor));
         }
         Ok(w)
@@ -258,19 +262,19 @@ impl LasWriter {
         mut settings: LasSettings,
         len: u64,
         wdp_len: Option<u64>,
-    ) -> io::Result<Self> {
+    ) -> Result<Self, WriteError> {
         // The file as the interrupted run finished it, or as a failed
         // resume left it.
         let partial = AtomicFile::partial_of(path);
         let t = tally::read(&partial, path, &settings, "continue")?;
         settings.creation_day_year = t.creation_day_year;
-        let bad = |what: String| {
-            file_error(
+        let bad = |reason: String| {
+            WriteError::new(
                 path,
-                io::Error::new(
-                    io::ErrorKind::InvalidData,
-                    format!("cannot continue this file: {what}"),
-                ),
+                WriteCause::Mismatch {
+                    action: "continue",
+                    reason,
+                },
             )
         };
         if t.file_len(&settings) != Some(len) {
@@ -311,8 +315,7 @@ impl LasWriter {
     /// Writes what is buffered, ends the compressed stream and writes the
     /// final headers of the LAS file and of its own waveform file; returns
     /// both files, to be committed or suspended.
-    #[allow(clippy::type_complexity)]
-    fn complete(mut self) -> io::Result<(AtomicFile, Option<(AtomicFile, PathBuf)>)> {
+    fn complete(mut self) -> Result<(AtomicFile, Option<AtomicFile>), WriteError> {
         if !self.buf.is_empty() {
             let rest = std::mem::take(&mut self.buf);
             self.file
@@ -339,52 +342,22 @@ impl LasWriter {
         {
             let len = wdp.next_offset - WDP_HEADER_LEN;
             let w = file.writer();
-            w.flush()?;
-            w.seek(SeekFrom::Start(0))?;
-            w.write_all(&wdp_header(len))?;
-            w.seek(SeekFrom::End(0))?;
-            wdp_file = Some((file, wdp.path));
+            w.flush()
+                .and_then(|()| w.seek(SeekFrom::Start(0)))
+                .and_then(|_| w.write_all(&wdp_header(len)))
+                .and_then(|()| w.seek(SeekFrom::End(0)))
+                .at(&wdp.path)?;
+            wdp_file = Some(file);
         }
         Ok((self.file, wdp_file))
     }
 
-    /// The 375-byte public header block (LAS 1.4 R15, Table 3).
+    /// The 375-byte public header block (LAS 1.4 R15, Table 3) for the
+    /// points written so far.
     fn header(&self) -> Vec<u8> {
         let s = &self.settings;
-        let list = self.settings.vlr_list().unwrap_or_default();
-        let vlr_count = list.len() as u32;
+        let list = s.vlr_list().unwrap_or_default();
         let vlr_bytes: usize = list.iter().map(vlr::Vlr::len).sum();
-        let mut h = Vec::with_capacity(HEADER_SIZE as usize);
-        h.extend_from_slice(b"LASF");
-        h.extend_from_slice(&s.file_source_id.to_le_bytes());
-        // Global encoding: bit 0 GPS time type; bit 2 waveform data packets
-        // in an external file; bit 4 WKT, which the specification requires
-        // for point formats 6–10.
-        let encoding: u16 = u16::from(s.adjusted_standard_gps_time)
-            | (u16::from(s.waveform.is_some()) << 2)
-            | (1 << 4);
-        h.extend_from_slice(&encoding.to_le_bytes());
-        h.extend_from_slice(&[0u8; 16]); // project ID (GUID)
-        h.extend_from_slice(&[1, 4]); // version 1.4
-        h.extend_from_slice(&fixed_str::<32>("lidarsim simulation"));
-        h.extend_from_slice(&fixed_str::<32>(&s.generating_software));
-        h.extend_from_slice(&s.creation_day_year.0.to_le_bytes());
-        h.extend_from_slice(&s.creation_day_year.1.to_le_bytes());
-        h.extend_from_slice(&HEADER_SIZE.to_le_bytes());
-        h.extend_from_slice(&(u32::from(HEADER_SIZE) + vlr_bytes as u32).to_le_bytes()); // offset to points
-        h.extend_from_slice(&vlr_count.to_le_bytes());
-        // Point data record format; bit 7 marks LASzip compression.
-        h.push(self.settings.point_format() | if s.compressed { 0x80 } else { 0 });
-        h.extend_from_slice(&self.settings.record_len().to_le_bytes());
-        // Legacy point counts: zero for point formats 6–10.
-        h.extend_from_slice(&0u32.to_le_bytes());
-        h.extend_from_slice(&[0u8; 20]);
-        for _ in 0..3 {
-            h.extend_from_slice(&s.scale_m.to_le_bytes());
-        }
-        for o in s.offset_m {
-            h.extend_from_slice(&o.to_le_bytes());
-        }
         let (min, max) = if self.count == 0 {
             ([0.0; 3], [0.0; 3])
         } else {
@@ -393,27 +366,45 @@ impl LasWriter {
                 [0, 1, 2].map(|a| self.max[a] as f64 * s.scale_m + s.offset_m[a]),
             )
         };
-        for a in 0..3 {
-            h.extend_from_slice(&max[a].to_le_bytes());
-            h.extend_from_slice(&min[a].to_le_bytes());
+        RawHeader {
+            file_source_id: s.file_source_id,
+            // Bit 0 GPS time type; bit 2 waveform data packets in an
+            // external file; bit 4 WKT, which the specification requires
+            // for point formats 6–10.
+            global_encoding: u16::from(s.adjusted_standard_gps_time)
+                | (u16::from(s.waveform.is_some()) << 2)
+                | (1 << 4),
+            version: (1, 4),
+            system_identifier: fixed_str::<32>("lidarsim simulation"),
+            generating_software: fixed_str::<32>(&s.generating_software),
+            creation_day_year: s.creation_day_year,
+            header_size: HEADER_SIZE,
+            offset_to_points: u32::from(HEADER_SIZE) + vlr_bytes as u32,
+            number_of_vlrs: list.len() as u32,
+            // Bit 7 of the format marks LASzip compression.
+            point_format: s.point_format() | if s.compressed { 0x80 } else { 0 },
+            record_len: s.record_len(),
+            scale: [s.scale_m; 3],
+            offset: s.offset_m,
+            max,
+            min,
+            point_count: self.count,
+            by_return: self.by_return,
+            // Legacy counts are zero for point formats 6–10, the waveform
+            // packets are in the external file and there are no EVLRs.
+            ..RawHeader::default()
         }
-        // Start of waveform data packet record: zero, the packets are in the
-        // external file.
-        h.extend_from_slice(&0u64.to_le_bytes());
-        h.extend_from_slice(&0u64.to_le_bytes()); // start of first EVLR
-        h.extend_from_slice(&0u32.to_le_bytes()); // number of EVLRs
-        h.extend_from_slice(&self.count.to_le_bytes());
-        for n in self.by_return {
-            h.extend_from_slice(&n.to_le_bytes());
-        }
-        debug_assert_eq!(h.len(), HEADER_SIZE as usize);
-        h
+        .to_bytes()
     }
 
     /// Encodes a block of points after the records gathered so far, and
     /// passes them on once they fill [`LAS_WRITE_BYTES`] (uncompressed) or
     /// at once (to the compressor). A block that fails leaves no record.
-    fn encode(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
+    fn encode(
+        &mut self,
+        points: &[PointRecord],
+        waveforms: &WaveformBlock,
+    ) -> Result<(), WriteError> {
         let start = self.buf.len();
         let before = (self.count, self.by_return, self.min, self.max);
         if let Err(e) = self.encode_records(points, waveforms) {
@@ -436,7 +427,7 @@ impl LasWriter {
         &mut self,
         points: &[PointRecord],
         waveforms: &WaveformBlock,
-    ) -> io::Result<()> {
+    ) -> Result<(), WriteError> {
         let mut cursor = 0;
         // (pulse key, wave packet fields) of the packet last written.
         let mut current: Option<((u16, u64), WavePacketLink)> = None;
@@ -445,7 +436,10 @@ impl LasWriter {
         self.buf
             .reserve(points.len() * usize::from(self.settings.record_len()));
         for p in points {
-            let xyz = self.settings.quantize_point(p.position_m)?;
+            let xyz = self
+                .settings
+                .quantize_point(p.position_m)
+                .map_err(|cause| WriteError::new(self.file.path(), cause))?;
             // The 30 bytes of point data record format 6 (LAS 1.4 R15,
             // Table 16).
             let mut rec = [0u8; POINT_FORMAT_6_LEN as usize];
@@ -463,7 +457,7 @@ impl LasWriter {
                 | (u8::from(p.scan_direction_positive) << 6)
                 | (u8::from(p.edge_of_flight_line) << 7);
             rec[16] = p.classification;
-            rec[17] = p.component; // user data: what returned the echo
+            rec[17] = p.component.code(); // user data: what returned the echo
             // Scan angle in 0.006° increments, −30 000 … +30 000.
             let sa = scan_angle_units(p.scan_angle_deg);
             rec[18..20].copy_from_slice(&sa.to_le_bytes());
@@ -486,10 +480,12 @@ impl LasWriter {
                         }
                         match waveforms.packets.get(cursor) {
                             Some(packet) => {
-                                let link = wdp.write_packet(
-                                    waveforms.samples_of(packet),
-                                    packet.first_sample_ps,
-                                )?;
+                                let link = wdp
+                                    .write_packet(
+                                        waveforms.samples_of(packet),
+                                        packet.first_sample_ps,
+                                    )
+                                    .at(&wdp.path)?;
                                 current = Some((key, link));
                                 Some(link)
                             }
@@ -512,7 +508,7 @@ impl LasWriter {
                 {
                     extra[4 * i..4 * i + 4].copy_from_slice(&(v as f32).to_le_bytes());
                 }
-                extra[16..20].copy_from_slice(&p.object_id.to_le_bytes());
+                extra[16..20].copy_from_slice(&p.object_code().to_le_bytes());
                 self.buf.extend_from_slice(&extra);
             }
             if self.settings.error_extra_bytes {
@@ -533,26 +529,31 @@ impl LasWriter {
 }
 
 impl PointSink for LasWriter {
-    fn write(&mut self, points: &[PointRecord]) -> io::Result<()> {
+    type Error = WriteError;
+
+    fn write(&mut self, points: &[PointRecord]) -> Result<(), WriteError> {
         self.encode(points, &WaveformBlock::default())
     }
 
-    fn write_block(&mut self, points: &[PointRecord], waveforms: &WaveformBlock) -> io::Result<()> {
+    fn write_block(
+        &mut self,
+        points: &[PointRecord],
+        waveforms: &WaveformBlock,
+    ) -> Result<(), WriteError> {
         self.encode(points, waveforms)
     }
 
-    fn finish(self: Box<Self>) -> io::Result<()> {
+    fn finish(self: Box<Self>) -> Result<(), WriteError> {
         let (file, wdp) = self.complete()?;
-        if let Some((wdp, path)) = wdp {
-            wdp.commit()
-                .map_err(|e| io::Error::new(e.kind(), format!("{}: {e}", path.display())))?;
+        if let Some(wdp) = wdp {
+            wdp.commit()?;
         }
         file.commit()
     }
 
-    fn suspend(self: Box<Self>) -> io::Result<()> {
+    fn suspend(self: Box<Self>) -> Result<(), WriteError> {
         let (file, wdp) = self.complete()?;
-        if let Some((wdp, _)) = wdp {
+        if let Some(wdp) = wdp {
             wdp.suspend()?;
         }
         file.suspend()

@@ -41,10 +41,10 @@ fn point(x: f64, t: f64) -> PointRecord {
         classification: 2,
         point_source_id: 1,
         pulse_index: 0,
-        object_id: 0,
+        object_id: None,
         incidence_angle_deg: Some(0.0),
         echo_time_ps: 0.0,
-        component: 0,
+        component: Default::default(),
         channel: 0,
     }
 }

@@ -2,7 +2,7 @@
 //! descriptors, waveform packet descriptors, the CRS WKT and the LASzip
 //! item description.
 
-use std::io;
+use crate::output::WriteCause;
 
 use super::LasSettings;
 use super::wdp::{WAVEFORM_BITS, WAVEFORM_DESCRIPTORS, WAVEFORM_SAMPLES_STEP};
@@ -116,7 +116,7 @@ impl LasSettings {
     }
 
     /// The VLRs between the header and the points.
-    pub(super) fn vlr_list(&self) -> io::Result<Vec<Vlr>> {
+    pub(super) fn vlr_list(&self) -> Result<Vec<Vlr>, WriteCause> {
         let mut list = Vec::new();
         let fields: Vec<&ExtraField> = self.extra_fields().collect();
         if !fields.is_empty() {
@@ -167,9 +167,8 @@ impl LasSettings {
             let mut d = wkt.as_bytes().to_vec();
             d.push(0);
             if d.len() > usize::from(u16::MAX) {
-                return Err(io::Error::new(
-                    io::ErrorKind::InvalidInput,
-                    "the CRS WKT is longer than a VLR can hold (65535 bytes)",
+                return Err(WriteCause::Unsupported(
+                    "the CRS WKT is longer than a VLR can hold (65535 bytes)".into(),
                 ));
             }
             list.push(Vlr {
@@ -193,7 +192,7 @@ impl LasSettings {
     }
 
     /// The VLRs' bytes.
-    pub(super) fn vlrs(&self) -> io::Result<Vec<u8>> {
+    pub(super) fn vlrs(&self) -> Result<Vec<u8>, WriteCause> {
         let mut v = Vec::new();
         for vlr in self.vlr_list()? {
             // VLR header (Table 13): reserved, user ID, record ID, record

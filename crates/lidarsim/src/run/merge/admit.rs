@@ -6,11 +6,10 @@
 use std::io;
 use std::path::{Path, PathBuf};
 
-use super::super::RunError;
-use super::super::part::{
-    PART_LAS, PART_POINTS, PART_RECORD, PartRecord, error, is_part_file, stitched,
-};
+use super::super::names::{PART_LAS, PART_POINTS, PART_RECORD, REPORT_STATE, SURVEY};
+use super::super::part::{PartRecord, is_part_file, refused, stitched};
 use super::super::resume::fnv1a_hex;
+use crate::error::Error;
 use crate::output::checksum::file_crc32;
 use crate::survey::Survey;
 
@@ -42,8 +41,8 @@ pub(super) fn finished(dir: &Path) -> bool {
 /// Refuses a record whose counts could not come from a part run: more
 /// parts than a survey is split into, a part number outside them, more
 /// return numbers than LAS has, or a file a part never writes.
-fn check_counts(path: &Path, r: &PartRecord) -> Result<(), RunError> {
-    let bad = |why: String| error(path, io::ErrorKind::InvalidData, why);
+fn check_counts(path: &Path, r: &PartRecord) -> Result<(), Error> {
+    let bad = |why: String| refused(path, why);
     super::super::part::check_part_number(r.part, r.parts)
         .map_err(|why| bad(format!("is not a part's record: {why}")))?;
     if r.points_by_return.len() > 15 || r.ranges.len() > 1 << 16 {
@@ -64,56 +63,41 @@ fn check_counts(path: &Path, r: &PartRecord) -> Result<(), RunError> {
 
 /// A part directory's record, checked against its own files (its survey
 /// text by hash, its point and report files by length and checksum).
-fn read_part(dir: &Path) -> Result<PartRecord, RunError> {
+fn read_part(dir: &Path) -> Result<PartRecord, Error> {
     let path = dir.join(PART_RECORD);
     let bytes = read_record(dir).map_err(|e| {
-        error(
+        refused(
             &path,
-            e.kind(),
             format!(
                 "not the record of a part ({e}); write parts with \
                  `lidarsim run SURVEY --part K/N -o DIR`"
             ),
         )
     })?;
-    let record: PartRecord = serde_json::from_slice(&bytes).map_err(|e| {
-        error(
-            &path,
-            io::ErrorKind::InvalidData,
-            format!("is not a part's record: {e}"),
-        )
-    })?;
+    let record: PartRecord = serde_json::from_slice(&bytes)
+        .map_err(|e| refused(&path, format!("is not a part's record: {e}")))?;
     check_counts(&path, &record)?;
     if !record.complete {
-        return Err(error(
+        return Err(refused(
             dir,
-            io::ErrorKind::InvalidData,
             format!(
                 "part {}/{} did not finish (its record says \"complete\": false): run it again",
                 record.part, record.parts
             ),
         ));
     }
-    let survey_path = dir.join("survey.toml");
+    let survey_path = dir.join(SURVEY);
     let text = crate::io::input::read_input(&survey_path, crate::io::input::MAX_SURVEY_BYTES)
-        .map_err(|e| {
-            error(
-                &survey_path,
-                e.kind(),
-                format!("cannot read the part's survey: {e}"),
-            )
-        })?;
+        .map_err(|e| refused(&survey_path, format!("cannot read the part's survey: {e}")))?;
     if fnv1a_hex(&text) != record.survey_fnv1a {
-        return Err(error(
+        return Err(refused(
             &survey_path,
-            io::ErrorKind::InvalidData,
-            "was changed after the part ran (its hash is not the one the part recorded)".into(),
+            "was changed after the part ran (its hash is not the one the part recorded)",
         ));
     }
     if ![PART_POINTS, PART_LAS].contains(&record.points_file.as_str()) {
-        return Err(error(
+        return Err(refused(
             &path,
-            io::ErrorKind::InvalidData,
             format!(
                 "names its points {:?}, which is neither {PART_POINTS} nor {PART_LAS}",
                 record.points_file
@@ -126,11 +110,7 @@ fn read_part(dir: &Path) -> Result<PartRecord, RunError> {
         &record.points_crc32,
     )];
     if record.report_bytes > 0 {
-        files.push((
-            super::super::REPORT_STATE,
-            record.report_bytes,
-            &record.report_crc32,
-        ));
+        files.push((REPORT_STATE, record.report_bytes, &record.report_crc32));
     }
     for (name, bytes, crc) in files {
         check_file(&dir.join(name), &record, bytes, crc.as_deref())?;
@@ -146,42 +126,34 @@ fn check_file(
     record: &PartRecord,
     bytes: u64,
     crc: Option<&str>,
-) -> Result<(), RunError> {
+) -> Result<(), Error> {
     let (k, n) = (record.part, record.parts);
     let name = file
         .file_name()
         .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-    let len = crate::io::input::check_input(file, u64::MAX).map_err(|e| {
-        error(
-            file,
-            e.kind(),
-            format!("cannot read the part's {name}: {e}"),
-        )
-    })?;
+    let len = crate::io::input::check_input(file, u64::MAX)
+        .map_err(|e| refused(file, format!("cannot read the part's {name}: {e}")))?;
     if len != bytes {
-        return Err(error(
+        return Err(refused(
             file,
-            io::ErrorKind::InvalidData,
             format!(
                 "holds {len} bytes, but part {k}/{n} wrote {bytes}: it was cut short or changed"
             ),
         ));
     }
     let Some(crc) = crc else {
-        return Err(error(
+        return Err(refused(
             file,
-            io::ErrorKind::InvalidData,
             format!(
                 "part {k}/{n} recorded no checksum of it (it was written by an earlier \
                  lidarsim): run the part again"
             ),
         ));
     };
-    let found = file_crc32(file).map_err(|e| error(file, e.kind(), e.to_string()))?;
+    let found = file_crc32(file).map_err(|e| refused(file, e.to_string()))?;
     if found != crc {
-        return Err(error(
+        return Err(refused(
             file,
-            io::ErrorKind::InvalidData,
             format!(
                 "is not the file part {k}/{n} wrote: its checksum is {found}, the part recorded \
                  {crc} (it was changed, or swapped with another part's)"
@@ -192,12 +164,8 @@ fn check_file(
 }
 
 /// The refusal of a merge given no part.
-fn no_part(out_dir: &Path) -> RunError {
-    error(
-        out_dir,
-        io::ErrorKind::InvalidInput,
-        "no part to merge".into(),
-    )
+fn no_part(out_dir: &Path) -> Error {
+    refused(out_dir, "no part to merge")
 }
 
 /// The parts of a merge so far, each checked against the first.
@@ -227,10 +195,9 @@ pub(super) struct First {
 
 impl First {
     /// The first part, in `dir` with its `record`, and its survey.
-    fn read(dir: &Path, record: &PartRecord) -> Result<Self, RunError> {
-        let survey_path = dir.join("survey.toml");
-        let survey = Survey::load(&survey_path)
-            .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string()))?;
+    fn read(dir: &Path, record: &PartRecord) -> Result<Self, Error> {
+        let survey_path = dir.join(SURVEY);
+        let survey = Survey::load(&survey_path)?;
         let with_report = stitched(&survey);
         Ok(First {
             dir: dir.to_path_buf(),
@@ -248,12 +215,11 @@ impl First {
         parts: &[(PathBuf, PartRecord)],
         dir: &Path,
         record: &PartRecord,
-    ) -> Result<(), RunError> {
+    ) -> Result<(), Error> {
         let r0 = &self.record;
         let foreign = |what: String| {
-            error(
+            refused(
                 dir,
-                io::ErrorKind::InvalidData,
                 format!(
                     "part {}/{} is not of the run of {}: {what}",
                     record.part,
@@ -281,9 +247,8 @@ impl First {
             )));
         }
         if let Some((other, _)) = parts.iter().find(|(_, r)| r.part == record.part) {
-            return Err(error(
+            return Err(refused(
                 dir,
-                io::ErrorKind::InvalidData,
                 format!(
                     "part {}/{} is given twice: {} and {}",
                     record.part,
@@ -294,9 +259,8 @@ impl First {
             ));
         }
         if record.points_file != self.points_file || (record.report_bytes > 0) != self.with_report {
-            return Err(error(
+            return Err(refused(
                 dir,
-                io::ErrorKind::InvalidData,
                 format!(
                     "part {}/{} holds {}, but the parts of its survey hold {}{}",
                     record.part,
@@ -319,7 +283,7 @@ impl Gathered {
     /// Adds the part in `dir` once its record and files agree with each
     /// other and with the parts before it; a part refused leaves them as
     /// they were.
-    pub(super) fn admit(&mut self, dir: &Path) -> Result<(), RunError> {
+    pub(super) fn admit(&mut self, dir: &Path) -> Result<(), Error> {
         let record = read_part(dir)?;
         match &self.first {
             Some(first) => first.check(&self.parts, dir, &record)?,
@@ -346,7 +310,7 @@ impl Gathered {
     pub(super) fn complete(
         self,
         out_dir: &Path,
-    ) -> Result<(First, Vec<(PathBuf, PartRecord)>), RunError> {
+    ) -> Result<(First, Vec<(PathBuf, PartRecord)>), Error> {
         self.missing(out_dir)?;
         match self.first {
             Some(first) => Ok((first, self.parts)),
@@ -355,7 +319,7 @@ impl Gathered {
     }
 
     /// Refuses a merge of no part or with a part missing.
-    pub(super) fn missing(&self, out_dir: &Path) -> Result<(), RunError> {
+    pub(super) fn missing(&self, out_dir: &Path) -> Result<(), Error> {
         let Some(first) = &self.first else {
             return Err(no_part(out_dir));
         };
@@ -371,9 +335,8 @@ impl Gathered {
             [one] => format!("part {one} is"),
             many => format!("parts {} are", many.join(", ")),
         };
-        Err(error(
+        Err(refused(
             out_dir,
-            io::ErrorKind::NotFound,
             format!("{which} missing: a merge needs all {n} parts"),
         ))
     }

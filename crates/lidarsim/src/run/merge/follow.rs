@@ -5,15 +5,15 @@
 //! for a job array whose merge starts with its parts rather than after
 //! them.
 
-use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use super::admit::finished;
 use super::{Merge, Parts};
-use crate::run::part::error;
-use crate::run::{RunError, RunOptions, Summary};
+use crate::error::Error;
+use crate::run::part::refused;
+use crate::run::{RunOptions, Summary};
 
 /// How a [`merge_following`] waits for its parts.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -53,7 +53,7 @@ pub fn merge_following(
     taken: Parts,
     follow: &Follow,
     parts_added: &dyn Fn(usize, usize),
-) -> Result<Summary, RunError> {
+) -> Result<Summary, Error> {
     crate::run::outdir::check_parts(out_dir, part_dirs)?;
     let mut merge = Merge::begin(out_dir, options.overwrite, taken)?;
     // A following merge is the one most likely to end early (a part that
@@ -95,21 +95,17 @@ pub fn merge_following(
 
 /// The error of a merge that stopped waiting for the parts in `waiting`:
 /// given up after the time `gave_up` names, or else stopped.
-fn not_finished(out_dir: &Path, waiting: &[&PathBuf], gave_up: Option<Duration>) -> RunError {
+fn not_finished(out_dir: &Path, waiting: &[&PathBuf], gave_up: Option<Duration>) -> Error {
     let which: Vec<String> = waiting.iter().map(|d| d.display().to_string()).collect();
-    let (kind, why) = match gave_up {
-        Some(limit) => (
-            io::ErrorKind::TimedOut,
-            format!(
-                "gave up after {:.1} s without a part finishing",
-                limit.as_secs_f64()
-            ),
+    let why = match gave_up {
+        Some(limit) => format!(
+            "gave up after {:.1} s without a part finishing",
+            limit.as_secs_f64()
         ),
-        None => (io::ErrorKind::Interrupted, "stopped".to_string()),
+        None => "stopped".to_string(),
     };
-    error(
+    refused(
         out_dir,
-        kind,
         format!(
             "merge {why}: {} of the parts did not finish: {}",
             which.len(),

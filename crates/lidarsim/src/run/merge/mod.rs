@@ -24,18 +24,20 @@ mod admit;
 mod feed;
 mod follow;
 
-use admit::{First, Gathered};
-pub(crate) use feed::gather;
-use feed::miscounted;
+use admit::Gathered;
+use feed::{PartsFeed, miscounted};
 pub use follow::{Follow, merge_following};
 
-use super::part::{PART_LAS, error, part_ranges};
+use super::names::{PART_LAS, REPORT_STATE, SURVEY};
+use super::part::{PartRecord, part_ranges, refused};
+use super::prepare::survey_text;
 use super::resume::fnv1a_hex;
-use super::{RunError, RunOptions, Source, Summary, execute, outdir};
-use crate::output::{LasJoin, LasWriter};
+use super::{RunOptions, Summary, drive, finish, outdir, prepare};
+use crate::error::Error;
+use crate::flight::Flight;
+use crate::output::{AtomicFile, JoinedLas, LasJoin, LasWriter};
 use crate::sim::RunCounts;
 use crate::survey::Survey;
-use crate::world::World;
 
 /// A part given to a merge: its point file, with the counts and the time
 /// its record holds.
@@ -81,24 +83,24 @@ pub fn merge(
     out_dir: &Path,
     options: &RunOptions<'_>,
     taken: Parts,
-) -> Result<Summary, RunError> {
+) -> Result<Summary, Error> {
     merge_over(part_dirs, out_dir, options, taken, None)
 }
 
-/// [`merge`], over the world `built` holds when it is the world of the
-/// parts' survey: when the survey it was built from is written as the
-/// parts wrote theirs (the same `survey.toml` text, by its hash in their
-/// records). The merge then neither reads the scene's files nor indexes
-/// it again; a world of another survey is not used (the merge builds its
-/// own, as [`merge`] does). A caller that kept the world the parts ran
-/// on, or built it while they ran, saves the merge that time.
+/// [`merge`], over the flight `built` when it is the flight of the
+/// parts' survey: when its survey is written as the parts wrote theirs
+/// (the same `survey.toml` text, by its hash in their records). The merge
+/// then neither reads the scene's files nor indexes it again; a flight of
+/// another survey is not used (the merge builds its own, as [`merge`]
+/// does). A caller that kept the flight the parts ran, or built it while
+/// they ran, saves the merge that time.
 pub fn merge_over(
     part_dirs: &[PathBuf],
     out_dir: &Path,
     options: &RunOptions<'_>,
     taken: Parts,
-    built: Option<(&Survey, &World)>,
-) -> Result<Summary, RunError> {
+    built: Option<&Flight>,
+) -> Result<Summary, Error> {
     outdir::check_parts(out_dir, part_dirs)?;
     let mut gathered = Gathered::default();
     for dir in part_dirs {
@@ -139,7 +141,7 @@ pub struct Merge {
 impl Merge {
     /// Begins a merge into `out_dir`, claimed as a run claims its output
     /// (`overwrite`: [`RunOptions::overwrite`]).
-    pub fn begin(out_dir: &Path, overwrite: bool, taken: Parts) -> Result<Self, RunError> {
+    pub fn begin(out_dir: &Path, overwrite: bool, taken: Parts) -> Result<Self, Error> {
         Ok(Self {
             out_dir: out_dir.to_path_buf(),
             taken,
@@ -163,7 +165,7 @@ impl Merge {
     /// the stitched parts' LAS files that can be joined in order. A part
     /// refused leaves the merge as it was; a part whose file cannot be
     /// joined fails the merge.
-    pub fn add(&mut self, dir: &Path) -> Result<(), RunError> {
+    pub fn add(&mut self, dir: &Path) -> Result<(), Error> {
         self.check_usable()?;
         outdir::check_parts(&self.out_dir, &[dir.to_path_buf()])?;
         let first_part = self.gathered.first.is_none();
@@ -174,7 +176,7 @@ impl Merge {
     }
 
     /// What [`Merge::add`] does once the part is admitted.
-    fn take_in(&mut self, first_part: bool) -> Result<(), RunError> {
+    fn take_in(&mut self, first_part: bool) -> Result<(), Error> {
         let Some(first) = &self.gathered.first else {
             return Ok(());
         };
@@ -184,33 +186,30 @@ impl Merge {
         if first.with_report {
             let take = self.move_first;
             while let Some((dir, r)) = self.gathered.part(self.join.parts() + 1) {
-                self.join
-                    .append(&dir.join(&r.points_file), take)
-                    .map_err(|e| super::run_error(&self.out_dir, e))?;
+                self.join.append(&dir.join(&r.points_file), take)?;
             }
         }
         Ok(())
     }
 
     /// Refuses a merge that failed.
-    fn check_usable(&self) -> Result<(), RunError> {
+    fn check_usable(&self) -> Result<(), Error> {
         if self.failed {
-            return Err(error(
+            return Err(refused(
                 &self.out_dir,
-                io::ErrorKind::Other,
-                "a part given to this merge could not be taken in: merge the parts again".into(),
+                "a part given to this merge could not be taken in: merge the parts again",
             ));
         }
         Ok(())
     }
 
     /// Finishes the merge once every part is added: the files [`merge`]
-    /// writes, over the world of `built` as [`merge_over`] uses it.
+    /// writes, over the flight `built` as [`merge_over`] uses it.
     pub fn finish(
         self,
         options: &RunOptions<'_>,
-        built: Option<(&Survey, &World)>,
-    ) -> Result<Summary, RunError> {
+        built: Option<&Flight>,
+    ) -> Result<Summary, Error> {
         self.check_usable()?;
         let Merge {
             out_dir,
@@ -218,153 +217,194 @@ impl Merge {
             move_first,
             claimed,
             gathered,
-            mut join,
+            join,
             ..
         } = self;
-        let (
-            First {
-                record: r0,
-                with_report,
-                ..
-            },
-            mut parts,
-        ) = gathered.complete(&out_dir)?;
-        let n = r0.parts;
+        let (first, mut parts) = gathered.complete(&out_dir)?;
         parts.sort_by_key(|(_, r)| r.part);
-        // The survey the parts ran, as the first part wrote it.
-        let survey_path = parts[0].0.join("survey.toml");
-        let survey = Survey::load(&survey_path)
-            .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string()))?;
-        let inputs: Vec<PartInput> = parts
-            .iter()
-            .map(|(dir, r)| PartInput {
-                points: dir.join(&r.points_file),
-                report: with_report.then(|| dir.join(super::REPORT_STATE)),
-                counts: r.counts(),
-                wall_time_s: r.wall_time_s,
+        let with_report = first.with_report;
+        let inputs = part_inputs(&parts, with_report);
+        // The survey the parts ran, as the first part wrote it, and its
+        // flight; the stitched parts not joined yet are joined meanwhile.
+        let survey = Survey::load(&parts[0].0.join(SURVEY))?;
+        let given = built.filter(|f| same_survey(f.survey(), &first.record));
+        let build = move || -> Result<Held<'_>, Error> {
+            Ok(match given {
+                Some(flight) => Held::Given(flight),
+                None => Held::Built(Box::new(Flight::build(survey)?)),
             })
-            .collect();
-
-        // Its world; the stitched parts not joined yet are joined
-        // meanwhile.
-        let las_path = out_dir.join(PART_LAS);
-        let given = built
-            .filter(|(s, _)| {
-                super::survey_text(s).is_ok_and(|t| fnv1a_hex(t.as_bytes()) == r0.survey_fnv1a)
-            })
-            .map(|(_, w)| w);
-        let build = || match given {
-            Some(world) => Ok(Held::Given(world)),
-            None => World::build(&survey)
-                .map(|w| Held::Built(Box::new(w)))
-                .map_err(|e| error(&survey_path, io::ErrorKind::InvalidData, e.to_string())),
         };
-        let (world, joined) = if with_report {
-            let joining = || {
-                let take = move_first;
-                let mut slots: u64 = inputs[..join.parts()]
-                    .iter()
-                    .map(|p| p.counts.pulse_slots)
-                    .sum();
-                if slots > 0 {
-                    (options.progress)(slots);
-                }
-                for part in &inputs[join.parts()..] {
-                    join.append(&part.points, take)
-                        .map_err(|e| super::run_error(&out_dir, e))?;
-                    slots += part.counts.pulse_slots;
-                    (options.progress)(slots);
-                }
-                join.finish().map_err(|e| super::run_error(&out_dir, e))
-            };
-            let (world, joined) = std::thread::scope(|s| {
-                let world = s.spawn(build);
-                let joined = joining();
+        let (held, joined) = if with_report {
+            let (held, joined) = std::thread::scope(|s| {
+                let held = s.spawn(build);
+                let joined = join_rest(join, &inputs, move_first, options.progress);
                 (
-                    world.join().expect("building a world does not panic"),
+                    held.join().expect("building a flight does not panic"),
                     joined,
                 )
             });
-            (world?, Some(joined?))
+            (held?, Some(joined?))
         } else {
             (build()?, None)
         };
+        let flight = held.get();
         // The file being joined is the one an earlier run's files may not
         // take with them.
-        let joining = joined
-            .is_some()
-            .then(|| crate::output::AtomicFile::partial_of(&las_path));
-        claimed.clear(joining.as_deref())?;
-        let world = world.get();
-        for (dir, r) in &parts {
-            if r.ranges != part_ranges(&survey, world, r.part, n) {
-                return Err(error(
-                    dir,
-                    io::ErrorKind::InvalidData,
-                    format!(
-                        "part {}/{n} simulated other pulses than its survey splits into part {}",
-                        r.part, r.part
-                    ),
-                ));
-            }
-        }
+        let las_partial = AtomicFile::partial_of(&out_dir.join(PART_LAS));
+        claimed.clear(joined.is_some().then_some(las_partial.as_path()))?;
+        check_ranges(flight, &parts)?;
         let joined = match joined {
+            Some(joined) => Some(adopt(flight, joined, &inputs)?),
             None => None,
-            Some(joined) => {
-                let settings = crate::files::las_settings(&survey, world);
-                let (writer, held) = LasWriter::adopt(joined, settings)
-                    .map_err(|e| super::run_error(&out_dir, e))?;
-                for (part, n) in inputs.iter().zip(held) {
-                    if n != part.counts.points {
-                        return Err(super::run_error(
-                            &out_dir,
-                            miscounted(&part.points, n, part.counts.points),
-                        ));
-                    }
-                }
-                Some(Box::new(writer))
-            }
         };
-        // Taken parts whose LAS files are joined and checked are not read
-        // again: those files go while the rest is written (unlinking the
-        // 31 files of the terrain split took 0.4 s), their directories at
-        // the end.
-        let early = taken == Parts::Take && joined.is_some();
-        let (summary, removed) = std::thread::scope(|s| {
-            let removing = early.then(|| s.spawn(|| remove_joined(&inputs)));
-            let summary = execute(
-                &survey,
-                world,
-                &out_dir,
-                options,
-                Source::Parts {
-                    parts: &inputs,
-                    joined,
-                    keep: (move_first && with_report)
-                        .then(|| crate::output::AtomicFile::partial_of(&las_path)),
-                },
-            );
-            let removed =
-                removing.map_or(Ok(()), |r| r.join().expect("removing files does not panic"));
-            (summary, removed)
-        });
-        let summary = summary?;
-        removed?;
+        let run = PartsRun {
+            inputs: &inputs,
+            keep: (move_first && with_report).then_some(las_partial),
+            // Taken parts whose LAS files are joined and checked are not
+            // read again: those files go while the rest is written
+            // (unlinking the 31 files of the terrain split took 0.4 s),
+            // their directories at the end.
+            remove_early: taken == Parts::Take && joined.is_some(),
+        };
+        let summary = run.run(flight, &out_dir, options, joined)?;
         if taken == Parts::Take {
-            for (dir, record) in &parts {
-                let kept = remove_part(dir, record)?;
-                if let (false, Some(warn)) = (kept.is_empty(), options.on_warning) {
-                    warn(&format!(
-                        "{}: kept the part's directory, without the files the part wrote: it \
-                         holds files lidarsim did not write ({})",
-                        dir.display(),
-                        kept.join(", ")
-                    ));
-                }
-            }
+            remove_parts(&parts, options)?;
         }
         Ok(summary)
     }
+}
+
+/// Whether `survey` is the one the parts ran: its `survey.toml` text
+/// hashes as the first part's record says.
+fn same_survey(survey: &Survey, first: &PartRecord) -> bool {
+    survey_text(survey).is_ok_and(|t| fnv1a_hex(t.as_bytes()) == first.survey_fnv1a)
+}
+
+/// The parts, in order, as a merge joins them.
+fn part_inputs(parts: &[(PathBuf, PartRecord)], with_report: bool) -> Vec<PartInput> {
+    parts
+        .iter()
+        .map(|(dir, r)| PartInput {
+            points: dir.join(&r.points_file),
+            report: with_report.then(|| dir.join(REPORT_STATE)),
+            counts: r.counts(),
+            wall_time_s: r.wall_time_s,
+        })
+        .collect()
+}
+
+/// Joins the stitched parts' LAS files that `join` has not joined yet
+/// (moving the first into place with `move_first`); `progress` in pulse
+/// slots after each part.
+fn join_rest(
+    mut join: LasJoin,
+    inputs: &[PartInput],
+    move_first: bool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<JoinedLas, Error> {
+    let mut slots: u64 = inputs[..join.parts()]
+        .iter()
+        .map(|p| p.counts.pulse_slots)
+        .sum();
+    if slots > 0 {
+        progress(slots);
+    }
+    for part in &inputs[join.parts()..] {
+        join.append(&part.points, move_first)?;
+        slots += part.counts.pulse_slots;
+        progress(slots);
+    }
+    Ok(join.finish()?)
+}
+
+/// Refuses parts that simulated other pulses than `flight` splits into.
+fn check_ranges(flight: &Flight, parts: &[(PathBuf, PartRecord)]) -> Result<(), Error> {
+    for (dir, r) in parts {
+        if r.ranges != part_ranges(flight, r.part, r.parts) {
+            return Err(refused(
+                dir,
+                format!(
+                    "part {}/{n} simulated other pulses than its survey splits into part {}",
+                    r.part,
+                    r.part,
+                    n = r.parts
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The LAS writer of `flight`'s `points.las` holding the `joined` parts,
+/// each checked to hold the points its record counts.
+fn adopt(
+    flight: &Flight,
+    joined: JoinedLas,
+    inputs: &[PartInput],
+) -> Result<Box<LasWriter>, Error> {
+    let (writer, held) = LasWriter::adopt(joined, flight.las_settings())?;
+    for (part, n) in inputs.iter().zip(held) {
+        if n != part.counts.points {
+            return Err(miscounted(&part.points, n, part.counts.points));
+        }
+    }
+    Ok(Box::new(writer))
+}
+
+/// The run a merge writes from its parts.
+struct PartsRun<'a> {
+    inputs: &'a [PartInput],
+    /// A file the merge leaves even if it fails: the first part's LAS
+    /// file, moved into the output to be joined to.
+    keep: Option<PathBuf>,
+    /// Remove the parts' joined files while the run is written.
+    remove_early: bool,
+}
+
+impl PartsRun<'_> {
+    /// Prepares, drives and finishes the run of `flight` into `out_dir`
+    /// from the parts (`joined`: the writer holding the stitched parts'
+    /// points).
+    fn run(
+        self,
+        flight: &Flight,
+        out_dir: &Path,
+        options: &RunOptions<'_>,
+        joined: Option<Box<LasWriter>>,
+    ) -> Result<Summary, Error> {
+        let inputs = self.inputs;
+        std::thread::scope(|s| {
+            let removing = self.remove_early.then(|| s.spawn(|| remove_joined(inputs)));
+            let summary = (|| {
+                let mut prepared = prepare::merged(flight, out_dir, options, joined, self.keep)?;
+                let feed = PartsFeed { parts: inputs };
+                let driven = drive::drive(flight, &mut prepared, feed, options)?;
+                finish::finish(flight, prepared, driven, options)
+            })();
+            let removed =
+                removing.map_or(Ok(()), |r| r.join().expect("removing files does not panic"));
+            let summary = summary?;
+            removed?;
+            Ok(summary)
+        })
+    }
+}
+
+/// Removes what each taken part wrote ([`remove_part`]), warning of a
+/// part's directory kept because it holds other files.
+fn remove_parts(parts: &[(PathBuf, PartRecord)], options: &RunOptions<'_>) -> Result<(), Error> {
+    for (dir, record) in parts {
+        let kept = remove_part(dir, record)?;
+        if let (false, Some(warn)) = (kept.is_empty(), options.on_warning) {
+            warn(&format!(
+                "{}: kept the part's directory, without the files the part wrote: it holds \
+                 files lidarsim did not write ({})",
+                dir.display(),
+                kept.join(", ")
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Removes what the part in `dir` wrote (its record's [`files`], checked
@@ -372,7 +412,7 @@ impl Merge {
 /// leaves it empty; returns the names of what else it holds, which stay.
 ///
 /// [`files`]: super::part::PartRecord::files
-fn remove_part(dir: &Path, record: &super::part::PartRecord) -> Result<Vec<String>, RunError> {
+fn remove_part(dir: &Path, record: &PartRecord) -> Result<Vec<String>, Error> {
     for name in record.written() {
         let path = dir.join(&name);
         match std::fs::remove_file(&path) {
@@ -380,7 +420,7 @@ fn remove_part(dir: &Path, record: &super::part::PartRecord) -> Result<Vec<Strin
             _ => {}
         }
     }
-    let data = dir.join(outdir::DATA_DIR);
+    let data = dir.join(super::names::DATA_DIR);
     if std::fs::read_dir(&data).is_ok_and(|mut d| d.next().is_none()) {
         std::fs::remove_dir(&data).map_err(|e| not_removed(&data, e))?;
     }
@@ -397,7 +437,7 @@ fn remove_part(dir: &Path, record: &super::part::PartRecord) -> Result<Vec<Strin
 
 /// Removes the point files of `parts`, joined already (a file moved into
 /// the output is gone already).
-fn remove_joined(parts: &[PartInput]) -> Result<(), RunError> {
+fn remove_joined(parts: &[PartInput]) -> Result<(), Error> {
     for part in parts {
         match std::fs::remove_file(&part.points) {
             Err(e) if e.kind() != io::ErrorKind::NotFound => {
@@ -411,24 +451,25 @@ fn remove_joined(parts: &[PartInput]) -> Result<(), RunError> {
 
 /// The error of a part's file or directory that was merged but could not
 /// be removed.
-fn not_removed(path: &Path, e: io::Error) -> RunError {
-    RunError {
-        path: path.to_path_buf(),
-        source: io::Error::new(e.kind(), format!("merged, but not removed: {e}")),
-    }
+fn not_removed(path: &Path, e: io::Error) -> Error {
+    Error::Part(crate::error::PathError::io(
+        path,
+        "merged, but not removed",
+        e,
+    ))
 }
 
-/// The world a merge runs over: the caller's, or one it built.
-enum Held<'w> {
-    /// The world of the parts' survey that the caller holds.
-    Given(&'w World),
-    /// The world the merge built.
-    Built(Box<World>),
+/// The flight a merge runs over: the caller's, or one it built.
+enum Held<'f> {
+    /// The flight of the parts' survey that the caller holds.
+    Given(&'f Flight),
+    /// The flight the merge built.
+    Built(Box<Flight>),
 }
 
 impl Held<'_> {
-    /// The world.
-    fn get(&self) -> &World {
+    /// The flight.
+    fn get(&self) -> &Flight {
         match self {
             Held::Given(world) => world,
             Held::Built(world) => world,

@@ -2,7 +2,7 @@
 //! of `[[scanner.channels]]`, each with its mounting, divergence,
 //! wavelength and share of the pulses.
 
-use super::Checker;
+use super::{Bounds, Checker};
 use crate::sensor::channel::{Channel, MAX_CYCLE};
 use crate::survey::KeyPath;
 use crate::survey::raw::RawScanner;
@@ -49,10 +49,7 @@ pub(crate) fn divergence(
         path.key("divergence_mrad"),
         across,
         default.0,
-        0.0,
-        false,
-        MAX_DIVERGENCE_MRAD,
-        " mrad",
+        Bounds::between(0.0, MAX_DIVERGENCE_MRAD, " mrad"),
     );
     let along_mrad = match (along, across) {
         (None, None) => default.1,
@@ -62,10 +59,7 @@ pub(crate) fn divergence(
                 path.key("divergence_along_mrad"),
                 given,
                 across_mrad,
-                0.0,
-                false,
-                MAX_DIVERGENCE_MRAD,
-                " mrad",
+                Bounds::between(0.0, MAX_DIVERGENCE_MRAD, " mrad"),
             );
             if across_mrad == 0.0 && v > 0.0 {
                 c.err(
@@ -133,12 +127,14 @@ pub(crate) fn channels(
                 k.key("along_tilt_deg"),
                 ch.along_tilt_deg,
                 0.0,
-                -45.0,
-                false,
-                45.0,
-                "°",
+                Bounds::between(-45.0, 45.0, "°"),
             );
-            let yaw = c.number(k.key("yaw_deg"), ch.yaw_deg, 0.0, -180.0, false, 180.0, "°");
+            let yaw = c.number(
+                k.key("yaw_deg"),
+                ch.yaw_deg,
+                0.0,
+                Bounds::between(-180.0, 180.0, "°"),
+            );
             let (across_mrad, along_mrad) = divergence(
                 c,
                 &k,

@@ -1,6 +1,6 @@
 //! `[scanner]`'s deflector keys: which kind, and the keys of that kind.
 
-use super::Checker;
+use super::{Bounds, Checker};
 use crate::message::num;
 use crate::sensor::deflector::risley::Prism;
 use crate::sensor::deflector::{Deflector, Fibre, Mirror, MirrorProfile, Palmer, Polygon, Risley};
@@ -12,7 +12,37 @@ const KINDS: [&str; 5] = ["oscillating", "polygon", "palmer", "risley", "fibre"]
 
 /// Checks the deflector keys of `[scanner]` (`sp`) for pulses at `prf_hz`.
 pub(crate) fn deflector(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f64) -> Deflector {
-    let kind = match s.deflector.as_deref() {
+    let kind = kind(c, s, sp);
+    check_owned_keys(c, s, sp, kind);
+    if kind == "risley" {
+        check_keys_risley_ignores(c, s, sp);
+        return Deflector::Risley(risley(c, s, sp, prf_hz));
+    }
+    let freq_key = sp.key("scan_frequency_hz");
+    let scan_frequency_hz = c.positive(freq_key.clone(), s.scan_frequency_hz, 50.0, " Hz");
+    // A polygon's facet may look up to ±180° (a mirror turning a full
+    // circle, as on UAV scanners that see sideways and up); the other
+    // deflectors look down.
+    let widest = if kind == "polygon" { 180.0 } else { 89.0 };
+    let scan_angle_deg = scan_angle(c, sp.key("scan_angle_deg"), s.scan_angle_deg, widest);
+    let sweep = Sweep {
+        freq_key,
+        prf_hz,
+        scan_frequency_hz,
+        scan_angle_deg,
+    };
+    match kind {
+        "polygon" => Deflector::Polygon(polygon(c, s, sp, &sweep)),
+        "palmer" => Deflector::Palmer(palmer(c, s, sp, &sweep)),
+        "fibre" => Deflector::Fibre(fibre(c, s, sp, &sweep)),
+        _ => Deflector::Oscillating(mirror(c, s, sp, &sweep)),
+    }
+}
+
+/// The deflector's kind, as `KINDS` spells it (the default when unknown,
+/// with a problem).
+fn kind<'a>(c: &mut Checker, s: &'a RawScanner, sp: &KeyPath) -> &'a str {
+    match s.deflector.as_deref() {
         None => "oscillating",
         Some(k) if KINDS.contains(&k) => k,
         Some("conic") => "palmer",
@@ -27,8 +57,11 @@ pub(crate) fn deflector(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f
             );
             "oscillating"
         }
-    };
-    // Keys that belong to one kind only.
+    }
+}
+
+/// Keys that belong to one kind only must not be given for another.
+fn check_owned_keys(c: &mut Checker, s: &RawScanner, sp: &KeyPath, kind: &str) {
     let owned = [
         ("mirror", s.mirror.is_some(), "oscillating"),
         ("facets", s.facets.is_some(), "polygon"),
@@ -60,146 +93,163 @@ pub(crate) fn deflector(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f
             );
         }
     }
-    // Keys every kind but the Risley prisms uses.
-    if kind == "risley" {
-        let unused = [
-            (
-                "scan_angle_deg",
-                s.scan_angle_deg.is_some(),
-                "the prisms set the field of view",
-            ),
-            (
-                "scan_frequency_hz",
-                s.scan_frequency_hz.is_some(),
-                "the rotors set the pattern",
-            ),
-        ];
-        for (key, given, why) in unused {
-            if given {
-                c.err(
-                    sp.key(key),
-                    format!("does not apply to deflector = \"risley\": {why}"),
-                );
-            }
-        }
-        return Deflector::Risley(risley(c, s, sp, prf_hz));
-    }
-    let freq_key = sp.key("scan_frequency_hz");
-    let scan_frequency_hz = c.positive(freq_key.clone(), s.scan_frequency_hz, 50.0, " Hz");
-    // A polygon's facet may look up to ±180° (a mirror turning a full
-    // circle, as on UAV scanners that see sideways and up); the other
-    // deflectors look down.
-    let widest = if kind == "polygon" { 180.0 } else { 89.0 };
-    let scan_angle_deg = scan_angle(c, sp.key("scan_angle_deg"), s.scan_angle_deg, widest);
-    let half = scan_angle_deg.to_radians();
-    // Fewest pulse slots per scan line (or per turn): below this the
-    // pattern is not drawn at all.
-    let limit = |c: &mut Checker, divisor: f64, label: &str, what: &str| {
-        let most = prf_hz / divisor;
-        if scan_frequency_hz > most {
+}
+
+/// Keys every kind but the Risley prisms uses must not be given for them.
+fn check_keys_risley_ignores(c: &mut Checker, s: &RawScanner, sp: &KeyPath) {
+    let unused = [
+        (
+            "scan_angle_deg",
+            s.scan_angle_deg.is_some(),
+            "the prisms set the field of view",
+        ),
+        (
+            "scan_frequency_hz",
+            s.scan_frequency_hz.is_some(),
+            "the rotors set the pattern",
+        ),
+    ];
+    for (key, given, why) in unused {
+        if given {
             c.err(
-                freq_key.clone(),
+                sp.key(key),
+                format!("does not apply to deflector = \"risley\": {why}"),
+            );
+        }
+    }
+}
+
+/// What every kind but the Risley prisms shares: a scan rate and angle.
+struct Sweep {
+    /// `scan_frequency_hz`'s key.
+    freq_key: KeyPath,
+    prf_hz: f64,
+    scan_frequency_hz: f64,
+    scan_angle_deg: f64,
+}
+
+impl Sweep {
+    /// Half the field of view, radians.
+    fn half_angle_rad(&self) -> f64 {
+        self.scan_angle_deg.to_radians()
+    }
+
+    /// Fewest pulse slots per scan line (or per turn), `divisor`: below
+    /// this the pattern is not drawn at all.
+    fn limit(&self, c: &mut Checker, divisor: f64, label: &str, what: &str) {
+        let most = self.prf_hz / divisor;
+        if self.scan_frequency_hz > most {
+            c.err(
+                self.freq_key.clone(),
                 format!(
                     "must be at most prf_hz / {label} = {} Hz, got {}: {what}",
                     num(most),
-                    num(scan_frequency_hz)
+                    num(self.scan_frequency_hz)
                 ),
             );
         }
+    }
+}
+
+/// A rotating polygon: its facets, and a field of view within each
+/// facet's sweep.
+fn polygon(c: &mut Checker, s: &RawScanner, sp: &KeyPath, sweep: &Sweep) -> Polygon {
+    let scan_angle_deg = sweep.scan_angle_deg;
+    let facets = c.count(sp.key("facets"), s.facets, 4, 2, 64) as u32;
+    if scan_angle_deg == 0.0 {
+        c.err(
+            sp.key("scan_angle_deg"),
+            "must be above 0 for a polygon: pulses leave only while a facet looks \
+             within ±scan_angle_deg, and a polygon with no field of view fires none",
+        );
+    }
+    let sweep_half_deg = 360.0 / f64::from(facets);
+    if scan_angle_deg > sweep_half_deg {
+        c.err(
+            sp.key("scan_angle_deg"),
+            format!(
+                "must be at most 360° / facets = {}° for {facets} facets (each facet \
+                 sweeps the beam through ±{}°), got {}",
+                num(sweep_half_deg),
+                num(sweep_half_deg),
+                num(scan_angle_deg)
+            ),
+        );
+    }
+    sweep.limit(
+        c,
+        4.0,
+        "4",
+        "scan_frequency_hz is the polygon's scan lines per second, and a line needs \
+         at least four pulse slots",
+    );
+    Polygon {
+        facets,
+        line_rate_hz: sweep.scan_frequency_hz,
+        scan_half_angle_rad: sweep.half_angle_rad(),
+    }
+}
+
+/// A Palmer (conical) scanner: its ellipse's half-angles.
+fn palmer(c: &mut Checker, s: &RawScanner, sp: &KeyPath, sweep: &Sweep) -> Palmer {
+    let along = match s.scan_angle_along_deg {
+        None => sweep.scan_angle_deg,
+        given => scan_angle(c, sp.key("scan_angle_along_deg"), given, 89.0),
     };
-    match kind {
-        "polygon" => {
-            let facets = c.count(sp.key("facets"), s.facets, 4, 2, 64) as u32;
-            if scan_angle_deg == 0.0 {
-                c.err(
-                    sp.key("scan_angle_deg"),
-                    "must be above 0 for a polygon: pulses leave only while a facet looks \
-                     within ±scan_angle_deg, and a polygon with no field of view fires none",
-                );
-            }
-            let sweep_half_deg = 360.0 / f64::from(facets);
-            if scan_angle_deg > sweep_half_deg {
-                c.err(
-                    sp.key("scan_angle_deg"),
-                    format!(
-                        "must be at most 360° / facets = {}° for {facets} facets (each facet \
-                         sweeps the beam through ±{}°), got {}",
-                        num(sweep_half_deg),
-                        num(sweep_half_deg),
-                        num(scan_angle_deg)
-                    ),
-                );
-            }
-            limit(
-                c,
-                4.0,
-                "4",
-                "scan_frequency_hz is the polygon's scan lines per second, and a line needs \
-                 at least four pulse slots",
+    sweep.limit(
+        c,
+        8.0,
+        "8",
+        "scan_frequency_hz is the Palmer scanner's turns per second, and a turn \
+         needs at least eight pulses to draw its ellipse",
+    );
+    Palmer {
+        rotation_hz: sweep.scan_frequency_hz,
+        across_half_angle_rad: sweep.half_angle_rad(),
+        along_half_angle_rad: along.to_radians(),
+    }
+}
+
+/// A fibre array: its fibres, each fired once per sweep.
+fn fibre(c: &mut Checker, s: &RawScanner, sp: &KeyPath, sweep: &Sweep) -> Fibre {
+    let fibres = c.count(sp.key("fibres"), s.fibres, 128, 2, 4096) as u32;
+    sweep.limit(
+        c,
+        f64::from(fibres),
+        "fibres",
+        "scan_frequency_hz is the fibre fan's sweeps per second, and each sweep \
+         fires every fibre once",
+    );
+    Fibre {
+        fibres,
+        scan_half_angle_rad: sweep.half_angle_rad(),
+        sweep_rate_hz: sweep.scan_frequency_hz,
+    }
+}
+
+/// An oscillating mirror: its profile.
+fn mirror(c: &mut Checker, s: &RawScanner, sp: &KeyPath, sweep: &Sweep) -> Mirror {
+    let profile = match s.mirror.as_deref() {
+        None | Some("triangle") => MirrorProfile::Triangle,
+        Some("sine") | Some("sinusoidal") => MirrorProfile::Sine,
+        Some(other) => {
+            c.err(
+                sp.key("mirror"),
+                format!("unknown mirror '{other}'; expected \"triangle\" or \"sine\""),
             );
-            Deflector::Polygon(Polygon {
-                facets,
-                line_rate_hz: scan_frequency_hz,
-                scan_half_angle_rad: half,
-            })
+            MirrorProfile::Triangle
         }
-        "palmer" => {
-            let along = match s.scan_angle_along_deg {
-                None => scan_angle_deg,
-                given => scan_angle(c, sp.key("scan_angle_along_deg"), given, 89.0),
-            };
-            limit(
-                c,
-                8.0,
-                "8",
-                "scan_frequency_hz is the Palmer scanner's turns per second, and a turn \
-                 needs at least eight pulses to draw its ellipse",
-            );
-            Deflector::Palmer(Palmer {
-                rotation_hz: scan_frequency_hz,
-                across_half_angle_rad: half,
-                along_half_angle_rad: along.to_radians(),
-            })
-        }
-        "fibre" => {
-            let fibres = c.count(sp.key("fibres"), s.fibres, 128, 2, 4096) as u32;
-            limit(
-                c,
-                f64::from(fibres),
-                "fibres",
-                "scan_frequency_hz is the fibre fan's sweeps per second, and each sweep \
-                 fires every fibre once",
-            );
-            Deflector::Fibre(Fibre {
-                fibres,
-                scan_half_angle_rad: half,
-                sweep_rate_hz: scan_frequency_hz,
-            })
-        }
-        _ => {
-            let profile = match s.mirror.as_deref() {
-                None | Some("triangle") => MirrorProfile::Triangle,
-                Some("sine") | Some("sinusoidal") => MirrorProfile::Sine,
-                Some(other) => {
-                    c.err(
-                        sp.key("mirror"),
-                        format!("unknown mirror '{other}'; expected \"triangle\" or \"sine\""),
-                    );
-                    MirrorProfile::Triangle
-                }
-            };
-            limit(
-                c,
-                4.0,
-                "4",
-                "the mirror would sweep its scan line with fewer than two pulses",
-            );
-            Deflector::Oscillating(Mirror {
-                profile,
-                scan_frequency_hz,
-                scan_half_angle_rad: half,
-            })
-        }
+    };
+    sweep.limit(
+        c,
+        4.0,
+        "4",
+        "the mirror would sweep its scan line with fewer than two pulses",
+    );
+    Mirror {
+        profile,
+        scan_frequency_hz: sweep.scan_frequency_hz,
+        scan_half_angle_rad: sweep.half_angle_rad(),
     }
 }
 
@@ -218,7 +268,7 @@ fn scan_angle(c: &mut Checker, key: KeyPath, value: Option<f64>, widest: f64) ->
         }
         other => other,
     };
-    c.number(key, given, 20.0, 0.0, false, widest, "°")
+    c.number(key, given, 20.0, Bounds::between(0.0, widest, "°"))
 }
 
 /// The Risley prisms: two or three, deviations adding up to less than 89°.
@@ -252,7 +302,12 @@ fn risley(c: &mut Checker, s: &RawScanner, sp: &KeyPath, prf_hz: f64) -> Risley 
     }
     let mut prisms = Vec::new();
     for (i, (&d, &f)) in devs.iter().zip(rots).enumerate() {
-        let d = c.number(dev_key.index(i), Some(d), 10.0, 0.0, true, 45.0, "°");
+        let d = c.number(
+            dev_key.index(i),
+            Some(d),
+            10.0,
+            Bounds::above(0.0, "°").at_most(45.0),
+        );
         if !f.is_finite() || f == 0.0 || f.abs() > prf_hz / 8.0 {
             c.err(
                 rot_key.index(i),

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::{Checker, outline};
+use super::{Bounds, Checker, outline};
 use crate::geometry::DVec3;
 use crate::message::num;
 use crate::sensor::platform::Interpolation;
@@ -31,9 +31,14 @@ pub(crate) fn lines(
         if l.speed_mps.is_none() {
             c.err(lp.key("speed_mps"), "is required: ground speed in m/s");
         }
-        let altitude = l
-            .altitude_m
-            .map(|a| c.number(lp.key("altitude_m"), Some(a), 0.0, -1e4, false, 1e5, " m"));
+        let altitude = l.altitude_m.map(|a| {
+            c.number(
+                lp.key("altitude_m"),
+                Some(a),
+                0.0,
+                Bounds::between(-1e4, 1e5, " m"),
+            )
+        });
         let (Some(mut start), Some(mut end)) = (start, end) else {
             continue;
         };
@@ -140,26 +145,25 @@ fn check_plan(c: &mut Checker, plan: &raw::RawPlan, scan_half_angle_rad: f64) ->
         pp.key("heading_deg"),
         plan.heading_deg,
         0.0,
-        -360.0,
-        false,
-        360.0,
-        "°",
+        Bounds::between(-360.0, 360.0, "°"),
     );
     let speed = c.positive(pp.key("speed_mps"), plan.speed_mps, 60.0, " m/s");
     let run_in = c.number(
         pp.key("run_in_m"),
         plan.run_in_m,
         0.0,
-        0.0,
-        false,
-        1e5,
-        " m",
+        Bounds::between(0.0, 1e5, " m"),
     );
     let swath = 2.0 * altitude * scan_half_angle_rad.tan();
     let spacing = match (plan.line_spacing_m, plan.side_overlap) {
         (Some(s), None) => c.positive(pp.key("line_spacing_m"), Some(s), 100.0, " m"),
         (None, Some(o)) => {
-            let o = c.number(pp.key("side_overlap"), Some(o), 0.2, 0.0, false, 0.95, "");
+            let o = c.number(
+                pp.key("side_overlap"),
+                Some(o),
+                0.2,
+                Bounds::between(0.0, 0.95, ""),
+            );
             swath * (1.0 - o)
         }
         (None, None) => swath * 0.8,

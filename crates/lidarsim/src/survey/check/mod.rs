@@ -19,6 +19,66 @@ use super::{KeyPath, MAX_COORDINATE_M, MAX_POLYGON_VERTICES, num, raw};
 use crate::geometry::DVec3;
 use crate::scene::{Material, SurfaceClass};
 
+/// The range a number of a survey must lie in, and its unit for messages.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Bounds<'u> {
+    lo: f64,
+    lo_open: bool,
+    hi: f64,
+    unit: &'u str,
+}
+
+impl<'u> Bounds<'u> {
+    /// `lo ≤ v ≤ hi`.
+    pub fn between(lo: f64, hi: f64, unit: &'u str) -> Self {
+        Self {
+            lo,
+            lo_open: false,
+            hi,
+            unit,
+        }
+    }
+
+    /// `lo ≤ v`.
+    pub fn at_least(lo: f64, unit: &'u str) -> Self {
+        Self::between(lo, f64::INFINITY, unit)
+    }
+
+    /// `lo < v`.
+    pub fn above(lo: f64, unit: &'u str) -> Self {
+        Self {
+            lo_open: true,
+            ..Self::at_least(lo, unit)
+        }
+    }
+
+    /// These bounds, with `v ≤ hi` besides.
+    pub fn at_most(self, hi: f64) -> Self {
+        Self { hi, ..self }
+    }
+
+    /// Whether `v` is finite and within the bounds.
+    fn holds(&self, v: f64) -> bool {
+        let below = if self.lo_open {
+            v <= self.lo
+        } else {
+            v < self.lo
+        };
+        v.is_finite() && !below && v <= self.hi
+    }
+
+    /// What the bounds ask, as a message says it.
+    fn describe(&self) -> String {
+        let (lo, hi, unit) = (num(self.lo), num(self.hi), self.unit);
+        match (self.lo_open, self.hi.is_finite()) {
+            (true, false) => format!("must be greater than {lo}{unit}"),
+            (false, false) => format!("must be at least {lo}{unit}"),
+            (true, true) => format!("must be greater than {lo} and at most {hi}{unit}"),
+            (false, true) => format!("must be between {lo} and {hi}{unit}"),
+        }
+    }
+}
+
 /// Collects problems with their key paths during validation.
 pub(crate) struct Checker {
     pub problems: Vec<(KeyPath, String)>,
@@ -51,36 +111,25 @@ impl Checker {
         );
     }
 
-    /// A finite number in `[lo, hi]` (open at the ends where `*_open`).
-    #[allow(clippy::too_many_arguments)]
+    /// A finite number within `bounds` (`default` when the key is absent
+    /// or at fault).
     pub fn number(
         &mut self,
         path: KeyPath,
         value: Option<f64>,
         default: f64,
-        lo: f64,
-        lo_open: bool,
-        hi: f64,
-        unit: &str,
+        bounds: Bounds<'_>,
     ) -> f64 {
         let v = value.unwrap_or(default);
-        let below = if lo_open { v <= lo } else { v < lo };
-        if !v.is_finite() || below || v > hi {
-            let (lo, hi_s) = (num(lo), num(hi));
-            let range = match (lo_open, hi.is_finite()) {
-                (true, false) => format!("must be greater than {lo}{unit}"),
-                (false, false) => format!("must be at least {lo}{unit}"),
-                (true, true) => format!("must be greater than {lo} and at most {hi_s}{unit}"),
-                (false, true) => format!("must be between {lo} and {hi_s}{unit}"),
-            };
-            self.err(path, format!("{range}, got {}", num(v)));
+        if !bounds.holds(v) {
+            self.err(path, format!("{}, got {}", bounds.describe(), num(v)));
             return default;
         }
         v
     }
 
     pub fn positive(&mut self, path: KeyPath, value: Option<f64>, default: f64, unit: &str) -> f64 {
-        self.number(path, value, default, 0.0, true, f64::INFINITY, unit)
+        self.number(path, value, default, Bounds::above(0.0, unit))
     }
 
     pub fn count(

@@ -1,7 +1,7 @@
 //! `preset`, `[gnss]`, `[imu]`, `[boresight]` and `[ranging]`: the
 //! navigation and measurement errors.
 
-use super::{Checker, axes, triple};
+use super::{Bounds, Checker, axes, triple};
 use crate::geometry::DVec3;
 use crate::sensor::navigation::{ErrorModel, NavigationErrors};
 use crate::survey::{KeyPath, MAX_ATTITUDE_ERROR_DEG, MAX_GNSS_ERROR_M, RawSurvey, raw};
@@ -100,10 +100,7 @@ pub(crate) fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationEr
                 } else {
                     100.0
                 },
-                0.0,
-                true,
-                1e6,
-                " s",
+                Bounds::above(0.0, " s").at_most(1e6),
             );
         }
         m
@@ -135,19 +132,13 @@ pub(crate) fn check_navigation(c: &mut Checker, raw: &RawSurvey) -> NavigationEr
             rp.key("sigma_m"),
             raw.ranging.sigma_m,
             0.0,
-            0.0,
-            false,
-            100.0,
-            " m",
+            Bounds::between(0.0, 100.0, " m"),
         ),
         encoder_sigma_rad: c.number(
             rp.key("encoder_sigma_deg"),
             raw.ranging.encoder_sigma_deg,
             0.0,
-            0.0,
-            false,
-            10.0,
-            "°",
+            Bounds::between(0.0, 10.0, "°"),
         ) * deg,
     }
 }

@@ -1,8 +1,8 @@
 //! `[platform]`: attitude sway, turbulence drift and the time between
 //! lines.
 
-use super::Checker;
-use crate::sensor::platform::SwayConfig;
+use super::{Bounds, Checker};
+use crate::sensor::platform::{DriftConfig, SwayConfig};
 use crate::survey::platform_preset::{self, PlatformPresetUse};
 use crate::survey::{KeyPath, MAX_SWAY_FREQUENCIES, RawSurvey};
 
@@ -10,8 +10,8 @@ use crate::survey::{KeyPath, MAX_SWAY_FREQUENCIES, RawSurvey};
 pub(crate) struct Platform {
     pub sway: Option<SwayConfig>,
     pub turn_time_s: f64,
-    /// Peak lateral and vertical drift, m, and its period, s.
-    pub drift: Option<([f64; 2], f64)>,
+    /// Turbulence drift when it is on.
+    pub drift: Option<DriftConfig>,
     /// The platform preset and the keys it set.
     pub preset: Option<PlatformPresetUse>,
 }
@@ -45,28 +45,19 @@ pub(crate) fn platform(c: &mut Checker, raw: &RawSurvey) -> Platform {
         pp.key("roll_amplitude_deg"),
         p.roll_amplitude_deg,
         d.roll_amplitude_rad.to_degrees(),
-        0.0,
-        false,
-        30.0,
-        "°",
+        Bounds::between(0.0, 30.0, "°"),
     );
     let pitch = c.number(
         pp.key("pitch_amplitude_deg"),
         p.pitch_amplitude_deg,
         d.pitch_amplitude_rad.to_degrees(),
-        0.0,
-        false,
-        30.0,
-        "°",
+        Bounds::between(0.0, 30.0, "°"),
     );
     let yaw = c.number(
         pp.key("yaw_amplitude_deg"),
         p.yaw_amplitude_deg,
         d.yaw_amplitude_rad.to_degrees(),
-        0.0,
-        false,
-        30.0,
-        "°",
+        Bounds::between(0.0, 30.0, "°"),
     );
     let freqs = match &p.sway_frequencies_hz {
         None => d.frequencies_hz.clone(),
@@ -99,10 +90,7 @@ pub(crate) fn platform(c: &mut Checker, raw: &RawSurvey) -> Platform {
         pp.key("turn_time_s"),
         p.turn_time_s,
         30.0,
-        0.0,
-        false,
-        1e7,
-        " s",
+        Bounds::between(0.0, 1e7, " s"),
     );
     let drift = match &p.drift_m {
         None => None,
@@ -121,7 +109,10 @@ pub(crate) fn platform(c: &mut Checker, raw: &RawSurvey) -> Platform {
     Platform {
         sway,
         turn_time_s,
-        drift: drift.map(|d| (d, drift_period_s)),
+        drift: drift.map(|amplitude_m| DriftConfig {
+            amplitude_m,
+            period_s: drift_period_s,
+        }),
         preset,
     }
 }

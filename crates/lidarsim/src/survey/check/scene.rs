@@ -5,7 +5,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use super::{Checker, Materials};
+use super::{Bounds, Checker, Materials};
 use crate::geometry::DVec3;
 use crate::scene::terrain::FbmSpec;
 use crate::scene::{Material, MeshPlacement, Polygon, SurfaceClass};
@@ -40,19 +40,13 @@ pub(crate) fn materials(c: &mut Checker, raw: &RawSurvey) -> Materials {
             mp.key("reflectance"),
             m.reflectance,
             0.0,
-            0.0,
-            false,
-            1.0,
-            "",
+            Bounds::between(0.0, 1.0, ""),
         );
         let incidence_exponent = c.number(
             mp.key("incidence_exponent"),
             m.incidence_exponent,
             1.0,
-            0.0,
-            false,
-            1000.0,
-            "",
+            Bounds::between(0.0, 1000.0, ""),
         );
         materials.insert(
             name.clone(),
@@ -186,10 +180,7 @@ pub(crate) fn meshes(
             mp.key("rotation_z_deg"),
             mesh.rotation_z_deg,
             0.0,
-            -360.0,
-            false,
-            360.0,
-            "°",
+            Bounds::between(-360.0, 360.0, "°"),
         );
         let default_material = match &mesh.material {
             None => None,
@@ -340,7 +331,12 @@ fn terrain(
                 }
             };
             let resolution_m = c.positive(tp.key("resolution_m"), t.resolution_m, 1.0, " m");
-            let relief_m = c.number(tp.key("relief_m"), t.relief_m, 20.0, 0.0, false, 1e4, " m");
+            let relief_m = c.number(
+                tp.key("relief_m"),
+                t.relief_m,
+                20.0,
+                Bounds::between(0.0, 1e4, " m"),
+            );
             let octaves = c.count(tp.key("octaves"), t.octaves, 6, 1, 16) as u32;
             let extent = extent?;
             let wavelength_m = c.positive(
@@ -404,10 +400,7 @@ pub(crate) fn clouds(
             pp.key("voxel_m"),
             pc.voxel_m,
             0.5,
-            0.01,
-            false,
-            1000.0,
-            " m",
+            Bounds::between(0.01, 1000.0, " m"),
         );
         let offset = match &pc.offset_m {
             None => Some(DVec3::ZERO),

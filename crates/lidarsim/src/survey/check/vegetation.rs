@@ -2,16 +2,16 @@
 //! crowns, single trees and generated stands (placed on the ground by
 //! [`crate::world`]).
 
-use super::{Checker, outline};
+use super::{Bounds, Checker, outline};
 use crate::canopy::{CanopyConfig, Marching, ReturnModel};
 use crate::message::num;
 use crate::scene::forest::ForestSpec;
-use crate::scene::{Species, TreeSpec};
+use crate::scene::{FoliageModel, FoliageSettings, Species, TreeSpec};
 use crate::survey::spec::TreeTableEntry;
 use crate::survey::{KeyPath, MAX_SPECIES_WEIGHT, MAX_TREES, MIN_TREE_HEIGHT_M, RawSurvey, raw};
 
-/// Checks `[vegetation]`: the canopy march and the whorl spacing.
-pub(crate) fn vegetation(c: &mut Checker, raw: &RawSurvey) -> (CanopyConfig, f64) {
+/// Checks `[vegetation]`: the canopy march and how crowns are filled.
+pub(crate) fn vegetation(c: &mut Checker, raw: &RawSurvey) -> (CanopyConfig, FoliageSettings) {
     let root = KeyPath::root();
     let v = &raw.vegetation;
     let vp = root.key("vegetation");
@@ -35,10 +35,7 @@ pub(crate) fn vegetation(c: &mut Checker, raw: &RawSurvey) -> (CanopyConfig, f64
             vp.key("partial_blocking"),
             v.partial_blocking,
             0.5,
-            0.0,
-            false,
-            10.0,
-            "",
+            Bounds::between(0.0, 10.0, ""),
         ),
         ReturnModel::Physical => {
             if v.partial_blocking.is_some() {
@@ -67,21 +64,58 @@ pub(crate) fn vegetation(c: &mut Checker, raw: &RawSurvey) -> (CanopyConfig, f64
         }),
     };
     let canopy = CanopyConfig {
-        step_m: c.number(vp.key("step_m"), v.step_m, 0.3, 0.01, false, 10.0, " m"),
+        step_m: c.number(
+            vp.key("step_m"),
+            v.step_m,
+            0.3,
+            Bounds::between(0.01, 10.0, " m"),
+        ),
         partial_blocking,
         return_model,
         marching,
     };
-    let whorl = c.number(
-        vp.key("whorl_spacing_m"),
-        v.whorl_spacing_m,
-        0.3,
-        0.0,
-        true,
-        10.0,
-        " m",
-    );
-    (canopy, whorl)
+    let model = match v.foliage.as_deref() {
+        None => FoliageModel::default(),
+        Some(name) => FoliageModel::from_name(name).unwrap_or_else(|| {
+            c.err(
+                vp.key("foliage"),
+                format!(
+                    "unknown foliage model '{name}'; expected \"physical\" (the default) or \
+                     \"specification\" (the specification's three factors)"
+                ),
+            );
+            FoliageModel::default()
+        }),
+    };
+    let d = FoliageSettings::default();
+    let foliage = FoliageSettings {
+        model,
+        whorl_spacing_m: c.number(
+            vp.key("whorl_spacing_m"),
+            v.whorl_spacing_m,
+            d.whorl_spacing_m,
+            Bounds::above(0.0, " m").at_most(10.0),
+        ),
+        clump_m: c.number(
+            vp.key("clump_m"),
+            v.clump_m,
+            d.clump_m,
+            Bounds::between(0.01, 10.0, " m"),
+        ),
+        clump_fraction: c.number(
+            vp.key("clump_fraction"),
+            v.clump_fraction,
+            d.clump_fraction,
+            Bounds::above(0.0, "").at_most(1.0),
+        ),
+        shell_m: c.number(
+            vp.key("shell_m"),
+            v.shell_m,
+            d.shell_m,
+            Bounds::above(0.0, " m").at_most(1000.0),
+        ),
+    };
+    (canopy, foliage)
 }
 
 /// Checks `[[tree]]` entries.
@@ -222,26 +256,25 @@ fn check_tree(
         t.crown_base_m,
         "height of the crown base in metres",
     );
-    let dbh = c.number(tp.key("dbh_m"), t.dbh_m, 0.2, 0.0, true, 5.0, " m");
+    let dbh = c.number(
+        tp.key("dbh_m"),
+        t.dbh_m,
+        0.2,
+        Bounds::above(0.0, " m").at_most(5.0),
+    );
     let problems_before = c.problems.len();
     let height = c.number(
         tp.key("height_m"),
         t.height_m,
         15.0,
-        MIN_TREE_HEIGHT_M,
-        false,
-        150.0,
-        " m",
+        Bounds::between(MIN_TREE_HEIGHT_M, 150.0, " m"),
     );
     let height_ok = c.problems.len() == problems_before;
     let crown_base = c.number(
         tp.key("crown_base_m"),
         t.crown_base_m,
         5.0,
-        0.0,
-        false,
-        150.0,
-        " m",
+        Bounds::between(0.0, 150.0, " m"),
     );
     if height_ok && crown_base >= height {
         c.err(
@@ -258,19 +291,13 @@ fn check_tree(
         tp.key("foliage_reflectance"),
         t.foliage_reflectance,
         tree.foliage_reflectance,
-        0.0,
-        false,
-        1.0,
-        "",
+        Bounds::between(0.0, 1.0, ""),
     );
     tree.bark_reflectance = c.number(
         tp.key("bark_reflectance"),
         t.bark_reflectance,
         tree.bark_reflectance,
-        0.0,
-        false,
-        1.0,
-        "",
+        Bounds::between(0.0, 1.0, ""),
     );
     tree.crown_radius_m = c.positive(
         tp.key("crown_radius_m"),
@@ -278,18 +305,22 @@ fn check_tree(
         tree.crown_radius_m,
         " m",
     );
-    tree.extinction_per_m = c.number(
-        tp.key("extinction_per_m"),
-        t.extinction_per_m,
-        tree.extinction_per_m,
-        0.0,
-        false,
-        100.0,
-        " 1/m",
-    );
-    tree.uniform_density = t
-        .uniform_density
-        .map(|d| c.number(tp.key("uniform_density"), Some(d), 0.5, 0.0, false, 1.0, ""));
+    tree.extinction_per_m = t.extinction_per_m.map(|k| {
+        c.number(
+            tp.key("extinction_per_m"),
+            Some(k),
+            k,
+            Bounds::between(0.0, 100.0, " 1/m"),
+        )
+    });
+    tree.uniform_density = t.uniform_density.map(|d| {
+        c.number(
+            tp.key("uniform_density"),
+            Some(d),
+            0.5,
+            Bounds::between(0.0, 1.0, ""),
+        )
+    });
     tree.seed = t.seed.unwrap_or_else(|| {
         crate::rng::entry_seed(survey_seed, crate::rng::Purpose::TreeSeed, index)
     });
@@ -315,10 +346,7 @@ fn check_forest(
         fp.key("stems_per_ha"),
         f.stems_per_ha,
         500.0,
-        0.0,
-        true,
-        20_000.0,
-        " /ha",
+        Bounds::above(0.0, " /ha").at_most(20_000.0),
     );
     let mix: Vec<(Species, f64)> = match &f.species {
         None => vec![(Species::Pine, 1.0)],
@@ -365,10 +393,7 @@ fn check_forest(
         fp.key("min_spacing_m"),
         f.min_spacing_m,
         1.0,
-        0.0,
-        false,
-        100.0,
-        " m",
+        Bounds::between(0.0, 100.0, " m"),
     );
     let seed = f.seed.unwrap_or_else(|| {
         crate::rng::entry_seed(survey_seed, crate::rng::Purpose::ForestSeed, index)

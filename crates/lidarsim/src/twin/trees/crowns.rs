@@ -19,9 +19,9 @@
 //! area cover 74 % of the cells the CHM has above 2 m). A crown's radius
 //! is therefore the radius of the top-centred disc that holds
 //! [`COVER_SHARE`] of its segment's cells: crowns then overlap as real
-//! interlocking crowns do and close the canopy where the scan's is closed
-//! (96 % of the canopy cells on that example), while a lone tree's crown
-//! stays the size of its segment.
+//! interlocking crowns do (96 % of the canopy cells on that example), but
+//! reach into the gaps too; the trees' module then scales every radius by
+//! one factor so that the discs cover the canopy's area.
 
 use rayon::prelude::*;
 

@@ -142,8 +142,53 @@ pub fn detect_trees(
         .zip(&bases)
         .map(|((t, s), &base)| twin_tree(t, s, base, ground, settings.species))
         .collect();
+    let trees = close_as_the_scan(&chm, area, trees);
     let report = report(&chm, area, &trees, &segments, settings, area_m2);
     (trees, report)
+}
+
+/// The trees with their crown radii scaled by one factor so that their
+/// discs cover as many cells of `area` as the CHM has canopy (at least
+/// 2 m high): the twin's canopy closes as much as the scan's. Crowns'
+/// envelopes block the beam near their edge as well as at their middle,
+/// so discs that spread into the scan's gaps (each disc holding
+/// [`crowns::COVER_SHARE`] of its segment covers most of the gaps between
+/// crowns too) would close gaps the scan sees through.
+fn close_as_the_scan(chm: &Grid, area: &Grid, mut trees: Vec<TwinTree>) -> Vec<TwinTree> {
+    let inside: Vec<bool> = (0..chm.values.len())
+        .map(|i| {
+            let [x, y] = chm.centre(i);
+            area.cell_of(x, y).is_some_and(|a| area.values[a] > 0.0)
+        })
+        .collect();
+    let canopy = (0..chm.values.len())
+        .filter(|&i| inside[i] && chm.values[i] >= 2.0)
+        .count();
+    if trees.is_empty() || canopy == 0 {
+        return trees;
+    }
+    let covered = |scale: f64| {
+        disc_cover(chm, &trees, &|t| trees[t].crown_radius_m * scale)
+            .iter()
+            .zip(&inside)
+            .filter(|(c, i)| **c && **i)
+            .count()
+    };
+    // The covered area grows with the scale: bisection on it.
+    let (mut lo, mut hi) = (0.2, 2.0);
+    for _ in 0..24 {
+        let mid = 0.5 * (lo + hi);
+        if covered(mid) < canopy {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let scale = 0.5 * (lo + hi);
+    for t in &mut trees {
+        t.crown_radius_m = (t.crown_radius_m * scale).clamp(0.25, MAX_CROWN_FACTOR * t.height_m);
+    }
+    trees
 }
 
 /// A tree from its top, segment and crown base.
