@@ -16,21 +16,29 @@
 //! on where the fixed rays land.
 //!
 //! **Cells and refinement.** Each sub-ray stands for a cell of the beam:
-//! the disk of solid angle `Ωᵢ = shareᵢ / I(rᵢ)` around it, `I` the beam's
-//! irradiance per steradian (the disk at most as wide as the distance to
-//! its neighbours). Where two neighbouring sub-rays see a discontinuity the
-//! receiver can resolve — closest hits more than the range resolution
-//! `c·FWHM/2` apart, or one a hit and the other a miss — the cells
-//! of both are sampled again by [`FINE_PER_CELL`] rays each, stratified
-//! over the disk and weighted by the irradiance there, the weights adding
-//! up to the cell's share ([`BeamPattern::fine_samples`]). A target smaller
-//! than a cell then returns power in proportion to the part of the cell it
-//! covers — its cross-section times the irradiance, so `R⁻⁴` for a point
-//! target — while an extended surface, whose cells are not refined, keeps
-//! the `R⁻²` of Eq. 2. A target that no coarse sub-ray meets is missed (it
-//! holds less than about one cell of the beam's energy); the jitter makes
-//! that a matter of chance in proportion to its size, not of where fixed
-//! rays fall.
+//! its Voronoi cell among the sub-rays, within the disk that holds
+//! 99.99 % of the energy (cells.rs), so that the cells tile the beam; a
+//! cell's energy is the Gaussian's over it ([`BeamPattern::cell_energy`]).
+//! Where two neighbouring sub-rays see a discontinuity the receiver can
+//! resolve — closest hits more than the range resolution `c·FWHM/2`
+//! apart, or one a hit and the other a miss — the cells of both are
+//! sampled again by a jittered grid of rays mapped onto the cell area for
+//! area and weighted by the irradiance there, the weights adding up to the
+//! cell's energy ([`BeamPattern::fine_samples`]); the sub-rays of the
+//! other cells share what is left.
+//!
+//! **Cone sampling.** A target between the sub-rays is found by the
+//! bundle traversal, which tests boxes and triangles against the cone of
+//! the sub-rays ([`crate::accel::PulseTrace::unseen`]); its outline in the
+//! pattern's plane ([`Outline`]), cut into the cells it meets, gives
+//! patches that are sampled by their own rays, each carrying its
+//! stratum's area times the irradiance at the ray
+//! ([`BeamPattern::patch_samples`]): the Gaussian beam's energy over the
+//! patch, taken from the cell's, whose sub-ray (or fine samples outside
+//! the patches) carries the rest (sim/cone.rs). A target smaller than a
+//! cell then returns the energy it intercepts — its cross-section times
+//! the irradiance, so `R⁻⁴` for a point target — in every pulse whose
+//! cone holds it, while an extended surface keeps the `R⁻²` of Eq. 2.
 //!
 //! With N = 1 the single ray is the beam's axis, neither jittered nor
 //! refined (the single-ray mode). Patterns of more than
@@ -126,6 +134,9 @@ pub struct BeamPattern {
     grids: [Vec<[f64; 2]>; 3],
     /// Radius of the disk the cells tile (a tangent).
     reach: f64,
+    /// The share of the beam's energy per unit of area of the pattern's
+    /// plane times `exp(−2(X² + Y²)/w²)`: the scale of [`Self::energy`].
+    norm: f64,
     /// 1/e² half-angle of the beam across (x), rad.
     w: f64,
     /// Ratio of the beam's along (y) to its across (x) divergence: the
@@ -238,7 +249,10 @@ impl BeamPattern {
         let mut energy: Vec<f64> = cells
             .iter()
             .map(|c| {
-                let sum: f64 = grids[2].iter().map(|&[a, b]| irradiance(c.sample(a, b))).sum();
+                let sum: f64 = grids[2]
+                    .iter()
+                    .map(|&[a, b]| irradiance(c.sample(a, b)))
+                    .sum();
                 c.area() * sum / grids[2].len() as f64
             })
             .collect();
@@ -246,6 +260,7 @@ impl BeamPattern {
         for e in &mut energy {
             *e /= total;
         }
+        let norm = if total > 0.0 { 1.0 / total } else { 0.0 };
         Self {
             offsets,
             base,
@@ -255,6 +270,7 @@ impl BeamPattern {
             neighbours,
             grids,
             reach,
+            norm,
             w,
             stretch_y,
         }
@@ -271,6 +287,7 @@ impl BeamPattern {
             neighbours: Vec::new(),
             grids: [Vec::new(), Vec::new(), Vec::new()],
             reach: 0.0,
+            norm: 0.0,
             w: 0.0,
             stretch_y: 1.0,
         }
@@ -342,6 +359,97 @@ impl BeamPattern {
         }
     }
 
+    /// The rays sampling the part of cell `i` where `keep` holds, as
+    /// [`BeamPattern::fine_samples`] samples the whole cell but with the
+    /// samples outside that part left out and the shares of the others
+    /// adding up to `energy`. Returns how many it appended (none when no
+    /// sample lies in the part).
+    pub fn fine_samples_where(
+        &self,
+        i: usize,
+        fineness: Fineness,
+        keep: impl Fn(PlanePoint) -> bool,
+        energy: f64,
+        out: &mut Vec<(DVec3, f64)>,
+    ) -> usize {
+        let cell = &self.cells[i];
+        let start = out.len();
+        let mut sum = 0.0;
+        for &[a, b] in &self.grids[fineness as usize] {
+            let x = cell.sample(a, b);
+            if !keep(x) {
+                continue;
+            }
+            let weight = self.irradiance(x);
+            sum += weight;
+            out.push((self.direction(x), weight));
+        }
+        if sum > 0.0 {
+            let scale = energy / sum;
+            for s in &mut out[start..] {
+                s.1 *= scale;
+            }
+        }
+        out.len() - start
+    }
+
+    /// The area of cell `i` in the pattern's plane.
+    pub fn cell_area(&self, i: usize) -> f64 {
+        self.cells[i].area()
+    }
+
+    /// The sub-ray of cell `i`, in the pattern's plane.
+    pub fn site(&self, i: usize) -> PlanePoint {
+        self.offsets[i]
+    }
+
+    /// The rays sampling the convex `patch` of the pattern's plane (within
+    /// the cells, with an area), as (undeflected unit direction, energy
+    /// share) appended to `out`: a 4 × 4 jittered grid (this pattern's)
+    /// mapped onto it area for area, each ray carrying its stratum's area
+    /// times the beam's irradiance at the ray — the Gaussian beam's energy
+    /// over the patch, by stratified quadrature. The rays where `keep`
+    /// fails are left out, so that their sum, which it returns, is that
+    /// energy over the part of the patch where `keep` holds (in
+    /// expectation over the jitter).
+    pub fn patch_samples(
+        &self,
+        patch: &Outline,
+        keep: impl Fn(PlanePoint) -> bool,
+        out: &mut Vec<(DVec3, f64)>,
+    ) -> f64 {
+        let grid = &self.grids[Fineness::Rays16 as usize];
+        let stratum = patch.area() / grid.len() as f64 * self.norm;
+        let mut sum = 0.0;
+        for &[a, b] in grid {
+            let x = patch.sample(a, b);
+            if !keep(x) {
+                continue;
+            }
+            let share = stratum * self.irradiance(x);
+            sum += share;
+            out.push((self.direction(x), share));
+        }
+        sum
+    }
+
+    /// Makes `outline` its part within cell `i`.
+    pub fn clip_to_cell(&self, i: usize, outline: &mut Outline) {
+        outline.clip_to_cell(&self.cells[i]);
+    }
+
+    /// The beam's relative irradiance at `x`, 1 on the axis.
+    #[inline]
+    fn irradiance(&self, x: PlanePoint) -> f64 {
+        (-2.0 * (x[0] * x[0] + x[1] * x[1]) / (self.w * self.w)).exp()
+    }
+
+    /// The undeflected unit direction through `x`.
+    #[inline]
+    fn direction(&self, x: PlanePoint) -> DVec3 {
+        DVec3::new(x[0], self.stretch_y * x[1], 1.0).normalize()
+    }
+
     /// The point of the pattern's plane where the undeflected beam frame's
     /// point `q` lies (`q.z > 0`): the sub-ray through it has direction
     /// `(X, stretch·Y, 1)`.
@@ -356,26 +464,9 @@ impl BeamPattern {
         outline.close(self.reach);
     }
 
-    /// The cells that the convex `outline` meets.
-    pub fn cells_meeting<'a>(&'a self, outline: &'a Outline) -> impl Iterator<Item = usize> + 'a {
-        self.cells
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.meets(outline))
-            .map(|(i, _)| i)
-    }
-
-    /// The fineness at which cell `i` is sampled densely enough for a
-    /// target `width` wide in the pattern's plane: the coarsest whose grid
-    /// squares, mapped onto the cell, are no wider than the target, so
-    /// that a strip of that width across the cell holds some of them (the
-    /// finest at most).
-    pub fn fineness_for(&self, i: usize, width: f64) -> Fineness {
-        let size = self.cells[i].area().sqrt();
-        Fineness::ALL
-            .into_iter()
-            .find(|f| size / f.side() as f64 <= width)
-            .unwrap_or(Fineness::Rays256)
+    /// Whether cell `i` meets the convex `outline`.
+    pub fn cell_meets(&self, i: usize, outline: &Outline) -> bool {
+        self.cells[i].meets(outline)
     }
 
     /// Lower and upper bounds of `n · (X, stretch·Y, 1)` over the points
@@ -638,9 +729,14 @@ mod tests {
             for a in [0.0f64, 1.0, 2.0] {
                 let left = pts
                     .iter()
-                    .filter(|x| (x[0] - centroid[0]) * a.cos() + (x[1] - centroid[1]) * a.sin() < 0.0)
+                    .filter(|x| {
+                        (x[0] - centroid[0]) * a.cos() + (x[1] - centroid[1]) * a.sin() < 0.0
+                    })
                     .count();
-                assert!(left.abs_diff(128) <= 16, "cell {i}, angle {a}: {left} of 256");
+                assert!(
+                    left.abs_diff(128) <= 16,
+                    "cell {i}, angle {a}: {left} of 256"
+                );
             }
         }
     }
@@ -655,7 +751,8 @@ mod tests {
         let w = div / 2.0;
         let beam = Beam::new(19, div);
         let h = 0.05 * w;
-        let erf_share = |c: f64| (erf(2f64.sqrt() * (c + h) / w) - erf(2f64.sqrt() * (c - h) / w)) / 2.0;
+        let erf_share =
+            |c: f64| (erf(2f64.sqrt() * (c + h) / w) - erf(2f64.sqrt() * (c - h) / w)) / 2.0;
         let mut rng = TableRng(9);
         let mut ratios = Vec::new();
         let mut fine = Vec::new();
@@ -696,7 +793,8 @@ mod tests {
                         + t * (-0.186_288_06
                             + t * (0.278_868_07
                                 + t * (-1.135_203_98
-                                    + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
+                                    + t * (1.488_515_87
+                                        + t * (-0.822_152_23 + t * 0.170_872_77))))))));
         let erfc = t * (-x * x + poly).exp();
         if x >= 0.0 { 1.0 - erfc } else { erfc - 1.0 }
     }

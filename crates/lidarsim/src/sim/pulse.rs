@@ -80,9 +80,11 @@ struct Emission {
 enum Sampling {
     /// By the pattern's sub-rays, each carrying the pattern's share.
     Coarse,
-    /// Some cells sampled again: their fine samples carry each cell's own
-    /// energy ([`BeamPattern::cell_energy`]), and the other sub-rays what
-    /// is left, `share` each, so that the pulse's energy stays whole.
+    /// Some cells sampled again (across a discontinuity, or where a
+    /// surface lies between the sub-rays, cone.rs): their fine samples
+    /// carry each cell's own energy ([`BeamPattern::cell_energy`]), and
+    /// the other sub-rays what is left, `share` each, so that the pulse's
+    /// energy stays whole.
     Refined {
         /// Energy share of each sub-ray whose cell is not sampled again.
         share: f64,
@@ -94,9 +96,9 @@ enum Sampling {
 struct Rays<'a> {
     dirs: &'a [DVec3],
     trace: &'a PulseTrace,
-    /// How finely each cell is sampled again, if it is (empty when none
-    /// is).
-    refine: &'a [Option<Fineness>],
+    /// How many fine samples stand for each cell, 0 for its sub-ray
+    /// (empty when no cell is sampled again).
+    counts: &'a [u32],
     fine: &'a [(DVec3, f64)],
     fine_dirs: &'a [DVec3],
     fine_trace: &'a PulseTrace,
@@ -111,8 +113,9 @@ impl Rays<'_> {
     fn each(&self, mut f: impl FnMut(&DVec3, f64, Option<Hit>)) {
         let mut j = 0;
         for (i, dir) in self.dirs.iter().enumerate() {
-            if let Some(fineness) = self.refine.get(i).copied().flatten() {
-                for _ in 0..fineness.rays() {
+            let count = self.counts.get(i).copied().unwrap_or(0);
+            if count > 0 {
+                for _ in 0..count {
                     let (dir, share) = (&self.fine_dirs[j], self.fine[j].1);
                     f(dir, share, self.fine_trace.hit(j));
                     j += 1;
@@ -209,6 +212,8 @@ impl Simulator<'_> {
             dirs,
             trace,
             refine,
+            counts,
+            cone,
             fine,
             fine_dirs,
             fine_trace,
@@ -223,28 +228,20 @@ impl Simulator<'_> {
         );
         self.caster
             .trace_pulse(em.origin, dirs, t_min, t_max, trace);
-        let refined = pattern.refined() && self.mark_discontinuities(pattern, trace, refine);
-        if !refined {
+        let marked = pattern.refined() && self.mark_discontinuities(pattern, trace, refine);
+        let marked = if marked { &refine[..] } else { &[] };
+        let patched = pattern.refined()
+            && (!trace.unseen().is_empty() || !marked.is_empty())
+            && self.find_patches((em.origin, to_world), pattern, trace, marked, cone);
+        if marked.is_empty() && !patched {
             return Sampling::Coarse;
         }
-        fine.clear();
-        let (mut left, mut coarse) = (1.0, 0usize);
-        for (i, fineness) in refine.iter().enumerate() {
-            match *fineness {
-                Some(fineness) => {
-                    pattern.fine_samples(i, fineness, fine);
-                    left -= pattern.cell_energy(i);
-                }
-                None => coarse += 1,
-            }
-        }
+        let share = Self::sample_cells(pattern, marked, cone, fine, counts);
         fine_dirs.clear();
         fine_dirs.extend(fine.iter().map(|(d, _)| to_world * *d));
         self.caster
             .trace_pulse(em.origin, fine_dirs, t_min, t_max, fine_trace);
-        Sampling::Refined {
-            share: left.max(0.0) / coarse.max(1) as f64,
-        }
+        Sampling::Refined { share }
     }
 
     /// Stage 3: each sub-ray through the crowns on its way (the
@@ -262,7 +259,7 @@ impl Simulator<'_> {
         let Scratch {
             dirs,
             trace,
-            refine,
+            counts,
             fine,
             fine_dirs,
             fine_trace,
@@ -326,7 +323,7 @@ impl Simulator<'_> {
         let rays = Rays {
             dirs,
             trace,
-            refine: if refined { refine } else { &[] },
+            counts: if refined { counts } else { &[] },
             fine,
             fine_dirs,
             fine_trace,

@@ -235,6 +235,12 @@ impl Outline {
     /// The convex hull of the points given, clipped to the square
     /// `|X|, |Y| ≤ half_side` (Andrew's monotone chain, 1979).
     pub(super) fn close(&mut self, half_side: f64) {
+        self.hull_of_points();
+        self.clip_to_square(half_side);
+    }
+
+    /// The convex hull of the points given, into `hull`.
+    fn hull_of_points(&mut self) {
         let pts = &mut self.points;
         pts.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
         pts.dedup();
@@ -261,6 +267,11 @@ impl Outline {
             }
             hull.pop();
         }
+    }
+
+    /// The hull clipped to the square `|X|, |Y| ≤ half_side`.
+    fn clip_to_square(&mut self, half_side: f64) {
+        let (hull, pts) = (&mut self.hull, &mut self.points);
         // Clipped to the square: the beam lies inside it, and far corners
         // of a large surface would only cost precision.
         if hull.len() >= 3 {
@@ -287,6 +298,97 @@ impl Outline {
     /// The corners of the outline.
     pub fn corners(&self) -> &[PlanePoint] {
         &self.hull
+    }
+
+    /// Makes this outline its part within the convex `cell`: the
+    /// intersection of two convex polygons, by clipping to each of the
+    /// cell's edges (empty when they share no area).
+    pub(super) fn clip_to_cell(&mut self, cell: &Cell) {
+        if self.hull.len() < 3 {
+            self.hull.clear();
+            return;
+        }
+        let c = &cell.corners;
+        for (k, &a) in c.iter().enumerate() {
+            let e = sub(c[(k + 1) % c.len()], a);
+            // Inside: left of the edge, cross(e, x − a) ≥ 0.
+            let n = [e[1], -e[0]];
+            clip(&self.hull, n, dot(a, n), &mut self.points);
+            std::mem::swap(&mut self.hull, &mut self.points);
+            if self.hull.len() < 3 {
+                self.hull.clear();
+                return;
+            }
+        }
+    }
+
+    /// Copies `other`'s corners, keeping this outline's storage.
+    pub fn copy_from(&mut self, other: &Outline) {
+        self.hull.clear();
+        self.hull.extend_from_slice(&other.hull);
+        self.points.clear();
+    }
+
+    /// Its area (0 for a point or a segment).
+    pub fn area(&self) -> f64 {
+        let h = &self.hull;
+        if h.len() < 3 {
+            return 0.0;
+        }
+        let o = h[0];
+        (1..h.len() - 1)
+            .map(|k| 0.5 * cross(sub(h[k], o), sub(h[k + 1], o)))
+            .sum()
+    }
+
+    /// The mean of its corners: a point inside it.
+    fn centre(&self) -> PlanePoint {
+        let n = self.hull.len() as f64;
+        let (x, y) = self
+            .hull
+            .iter()
+            .fold((0.0, 0.0), |(x, y), p| (x + p[0], y + p[1]));
+        [x / n, y / n]
+    }
+
+    /// Whether `p` lies inside it or on its edge (an outline without area
+    /// holds no point).
+    pub fn contains(&self, p: PlanePoint) -> bool {
+        let h = &self.hull;
+        h.len() >= 3
+            && h.iter().enumerate().all(|(k, &a)| {
+                let b = h[(k + 1) % h.len()];
+                cross(sub(b, a), sub(p, a)) >= 0.0
+            })
+    }
+
+    /// The point that `(a, b)` of the unit square maps to, area for area,
+    /// as [`Cell::sample`] maps it onto a cell: the fan of triangles from
+    /// the mean of the corners (inside the convex outline). Needs an area.
+    pub(super) fn sample(&self, a: f64, b: f64) -> PlanePoint {
+        let h = &self.hull;
+        let site = self.centre();
+        let tri = |k: usize| 0.5 * cross(sub(h[k], site), sub(h[(k + 1) % h.len()], site)).max(0.0);
+        let total: f64 = (0..h.len()).map(tri).sum();
+        let mut s = a * total;
+        let mut k = 0;
+        while k + 1 < h.len() && s >= tri(k) {
+            s -= tri(k);
+            k += 1;
+        }
+        let width = tri(k);
+        let t = if width > 0.0 {
+            (s / width).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let (p, q) = (h[k], h[(k + 1) % h.len()]);
+        let edge = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
+        let f = b.sqrt();
+        [
+            site[0] + f * (edge[0] - site[0]),
+            site[1] + f * (edge[1] - site[1]),
+        ]
     }
 
     /// Lower and upper corners of its box (`None`: empty).
