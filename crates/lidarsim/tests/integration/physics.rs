@@ -558,14 +558,14 @@ fn a_small_plate_is_seen_by_every_pulse_aimed_at_it() {
 /// The waveform receiver's amplitude is the echo's energy, exactly what
 /// the radar equation gives (a discrete receiver's is the peak, which for
 /// a level plate is the same up to the fit). The tolerance: the plate's
-/// energy is estimated per pulse by 16 jittered samples over it, an
-/// unbiased stratified quadrature of the irradiance whose relative error
-/// is about |∇ ln I|·s/√12/√16 (s the stratum's size): at 500 m, the axis
-/// within 2 cm of the plate's centre, 4·0.02/0.075² m⁻¹ × 7.5 mm /√12/4
-/// ≈ 0.8 % per pulse, under 0.1 % over some 600 pulses; the cells hold
-/// 99.99 % of the beam and their energy is scaled to the whole. So 1 %
-/// per range and 2 % on the ratio leave room for the waveform's
-/// binning.
+/// energy is estimated per pulse by 2 × 2 jittered samples over each of
+/// its pieces in the beam's cells, an unbiased stratified quadrature of
+/// the irradiance whose relative error is about |∇ ln I|·s/√12/√4 (s the
+/// stratum's size, at most half the plate): at 500 m, the axis within
+/// 2 cm of the plate's centre, 4·0.02/0.075² m⁻¹ × 15 mm /√12/2 ≈ 3 % per
+/// pulse, 0.13 % over some 560 pulses; the cells hold 99.99 % of the beam
+/// and their energy is scaled to the whole. So 1 % per range and 2 % on
+/// the ratio leave room for the waveform's binning.
 #[test]
 fn a_small_plates_echo_follows_the_beam_energy_over_it_and_r_to_the_fourth() {
     let mut means = Vec::new();
