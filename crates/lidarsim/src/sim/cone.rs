@@ -247,6 +247,21 @@ impl Simulator<'_> {
         }
         let hit_by = |i: usize| pulse.trace.hit(i).is_some_and(|h| h.prim == p);
         let own = |i: usize| pulse.marked(i) && hit_by(i);
+        // The usual case first: a surface that lies nowhere in the beam
+        // resolvably nearer than the farthest closest hit (the least depth
+        // of its plane over the whole beam, for a plane), such as the
+        // neighbours of a continuous surface.
+        let mut lo_all = near;
+        if let Some((n, c)) = plane {
+            let (a, b) = pattern.normal_range(None, n);
+            if a > 0.0 {
+                lo_all = lo_all.max(c / b);
+            }
+        }
+        if lo_all >= pulse.farthest - d && (pulse.marked.is_empty() || !(0..pattern.len()).any(own))
+        {
+            return;
+        }
         // The cells where it may lie resolvably nearer than the closest hit
         // (the least depth of its plane over the cell, for a plane), or
         // that are sampled again and whose sub-ray hit it: cheap tests
@@ -306,7 +321,7 @@ impl Simulator<'_> {
         let patches = &cone.patches[..cone.used];
         let (mut left, mut coarse) = (1.0, 0usize);
         let mut k = 0;
-        for i in 0..n {
+        for (i, count) in counts.iter_mut().enumerate() {
             let start = k;
             while k < patches.len() && patches[k].cell == i {
                 k += 1;
@@ -350,7 +365,7 @@ impl Simulator<'_> {
             if fine.len() == before {
                 fine.push((pattern.base_directions()[i], energy));
             }
-            counts[i] = (fine.len() - before) as u32;
+            *count = (fine.len() - before) as u32;
             left -= energy;
         }
         left.max(0.0) / coarse.max(1) as f64

@@ -509,8 +509,9 @@ fn plate_pulses(r: f64, receiver: &str) -> Vec<((f64, f64), Option<f64>)> {
         ),
     );
     let points = simulate(&s, 2);
-    let mut by_pulse: std::collections::BTreeMap<u64, (Option<(f64, f64)>, Option<f64>)> =
-        Default::default();
+    // Per pulse: where its ground echo lies, and the plate's echo.
+    type Seen = (Option<(f64, f64)>, Option<f64>);
+    let mut by_pulse: std::collections::BTreeMap<u64, Seen> = Default::default();
     for p in &points {
         let e = by_pulse.entry(p.pulse_index).or_default();
         match p.classification {

@@ -79,37 +79,17 @@ impl Bvh {
                             bundle_triangle(tri, p, dirs, &cone, t_min, &mut best, &mut unseen);
                         continue;
                     }
-                    // A stem the whole cone misses costs one test.
-                    let cylinder = prim.bounds_cylinder();
-                    if let Some(c) = cylinder
-                        && !c.may_meet_cone(origin, axis, spread, t_min, far)
-                    {
-                        continue;
-                    }
-                    let mut recorded = false;
-                    for (dir, b) in dirs.iter().zip(best.iter_mut()) {
-                        let ray = Ray { origin, dir: *dir };
-                        if let Some(t) = prim.intersect(&ray, t_min, b.t) {
-                            match b.prim() {
-                                Some(q) => unseen.push(q),
-                                None => missing -= 1,
-                            }
-                            *b = Nearest::hit(t, p, DVec3::NAN);
-                            normals_missing = true;
-                            recorded = true;
-                        }
-                    }
-                    // Between the sub-rays: a stem within its cylinder's
-                    // test, another surface within its box's.
-                    if !recorded
-                        && (cylinder.is_some()
-                            || prim
-                                .bounds()
-                                .cone_interval(origin, axis, spread, t_min, far)
-                                .is_some())
-                    {
-                        unseen.push(p);
-                    }
+                    let (first, normal_less) = bundle_other(
+                        prim,
+                        p,
+                        (origin, axis, spread),
+                        dirs,
+                        (t_min, far),
+                        &mut best,
+                        &mut unseen,
+                    );
+                    missing -= first;
+                    normals_missing |= normal_less;
                 }
                 if missing == 0 {
                     far = best
@@ -241,6 +221,55 @@ impl Bvh {
                 .is_none_or(|c| c.may_meet_cone(origin, axis, spread, t_min, t_far))
         });
     }
+}
+
+/// Records primitive `p` (not a triangle nor a volume) for every ray of
+/// `dirs` that meets it nearer than its best so far, within `(t_min,
+/// far)`: a stem the whole cone from `origin` of `(axis, spread)` misses
+/// costs one test.
+/// The primitives whose records it takes go to `unseen`, and `p` itself
+/// when it records none but the cone may meet it (a stem within its
+/// cylinder's test, another surface within its box's). Returns how many
+/// rays got their first hit, and whether it recorded any (without its
+/// normal).
+#[inline]
+fn bundle_other(
+    prim: &crate::scene::Primitive,
+    p: u32,
+    (origin, axis, spread): (DVec3, DVec3, f64),
+    dirs: &[DVec3],
+    (t_min, far): (f64, f64),
+    best: &mut [Nearest],
+    unseen: &mut Vec<u32>,
+) -> (usize, bool) {
+    let cylinder = prim.bounds_cylinder();
+    if let Some(c) = cylinder
+        && !c.may_meet_cone(origin, axis, spread, t_min, far)
+    {
+        return (0, false);
+    }
+    let (mut first, mut recorded) = (0, false);
+    for (dir, b) in dirs.iter().zip(best.iter_mut()) {
+        let ray = Ray { origin, dir: *dir };
+        if let Some(t) = prim.intersect(&ray, t_min, b.t) {
+            match b.prim() {
+                Some(q) => unseen.push(q),
+                None => first += 1,
+            }
+            *b = Nearest::hit(t, p, DVec3::NAN);
+            recorded = true;
+        }
+    }
+    if !recorded
+        && (cylinder.is_some()
+            || prim
+                .bounds()
+                .cone_interval(origin, axis, spread, t_min, far)
+                .is_some())
+    {
+        unseen.push(p);
+    }
+    (first, recorded)
 }
 
 /// The fan of `tri` from the cone's origin with its edge planes only
