@@ -135,6 +135,31 @@ impl Aabb {
         }
         (t0 <= t1).then_some((t0, t1))
     }
+
+    /// The distances within `[t_min, t_max]` at which a ray of a cone may
+    /// be inside the box, if any: the rays leave `origin` and each one's
+    /// point at distance `t` lies within `t·spread` of `origin + t·axis`
+    /// (`axis` the mean of unit directions and `spread` the largest
+    /// distance of one from it, as for [`VerticalCylinder::may_meet_cone`]),
+    /// so a ray inside the box at `t ≤ t_max` puts `origin + t·axis` inside
+    /// the box grown by `t_max·spread`. Every point of the box that a ray
+    /// of the cone reaches at a distance up to `t_max` lies at a distance
+    /// within the interval; `None` means no ray reaches the box.
+    pub fn cone_interval(
+        &self,
+        origin: DVec3,
+        axis: DVec3,
+        spread: f64,
+        t_min: f64,
+        t_max: f64,
+    ) -> Option<(f64, f64)> {
+        let margin = DVec3::splat((spread * (1.0 + 1e-9) + 1e-9) * t_max);
+        let grown = Aabb {
+            min: self.min - margin,
+            max: self.max + margin,
+        };
+        grown.ray_interval(&Ray { origin, dir: axis }, t_min, t_max)
+    }
 }
 
 /// An upright cylinder: the bounds of a tree's stem or crown.
@@ -317,6 +342,57 @@ mod tests {
 
     fn close(a: DVec3, b: DVec3) -> bool {
         (a - b).length() < 1e-12
+    }
+
+    /// Every ray of a cone that is inside a box at some distance finds
+    /// that distance within the box's cone interval; boxes beside the cone
+    /// have none.
+    #[test]
+    fn cone_intervals_hold_every_ray_inside_the_box() {
+        let mut rng = crate::rng::Stream::new(5, 0, 0, crate::rng::Purpose::Test);
+        let (mut inside, mut apart) = (0, 0);
+        for case in 0..2000 {
+            let mut u = || rng.uniform() - 0.5;
+            let origin = DVec3::new(u() * 100.0, u() * 100.0, 400.0 + u() * 100.0);
+            let centre = DVec3::new(u() * 20.0, u() * 20.0, u() * 20.0);
+            let size = DVec3::new(u() + 0.5, u() + 0.5, u() + 0.5) * [0.05, 1.0, 8.0][case % 3];
+            let b = Aabb {
+                min: centre - size,
+                max: centre + size,
+            };
+            let aim = (centre + DVec3::new(u(), u(), u()) * 6.0 - origin).normalize();
+            let (e1, e2) = (
+                aim.any_orthonormal_vector(),
+                aim.cross(aim.any_orthonormal_vector()),
+            );
+            let width = [1e-4, 3e-3, 2e-2][(case / 3) % 3];
+            let dirs: Vec<DVec3> = (0..19)
+                .map(|i| {
+                    let r = width * (i as f64 / 18.0).sqrt();
+                    let a = i as f64 * 2.4;
+                    (aim + e1 * (r * a.cos()) + e2 * (r * a.sin())).normalize()
+                })
+                .collect();
+            let (axis, spread) = crate::scene::bundle_spread(&dirs);
+            let interval = b.cone_interval(origin, axis, spread, 0.0, 1e4);
+            let mut met = false;
+            for d in &dirs {
+                if let Some((t0, t1)) = b.ray_interval(&Ray { origin, dir: *d }, 0.0, 1e4) {
+                    met = true;
+                    let (lo, hi) = interval.unwrap_or_else(|| panic!("case {case}"));
+                    assert!(
+                        lo <= t0 && t1 <= hi,
+                        "case {case}: [{t0}, {t1}] in [{lo}, {hi}]"
+                    );
+                }
+            }
+            if met {
+                inside += 1;
+            } else if interval.is_none() {
+                apart += 1;
+            }
+        }
+        assert!(inside > 200 && apart > 200, "{inside} {apart}");
     }
 
     #[test]

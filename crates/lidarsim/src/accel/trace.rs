@@ -1,5 +1,6 @@
-//! The result of tracing a pulse: per sub-ray its closest hit, and the
-//! crowns on the pulse's way.
+//! The result of tracing a pulse: per sub-ray its closest hit, the crowns
+//! on the pulse's way, and the surfaces in the pulse's cone that no
+//! sub-ray hit.
 
 use super::{Hit, VolumeSpan, bvh};
 use crate::geometry::DVec3;
@@ -16,6 +17,11 @@ pub struct PulseTrace {
     /// surface, each once: a superset of the crowns crossed (those whose
     /// bounds the traversal could not rule out), in no particular order.
     pub(crate) volumes: Vec<u32>,
+    /// Every surface primitive the traversal found the cone of the
+    /// sub-rays may meet but no sub-ray has as its closest hit, each once,
+    /// in increasing order: a superset of those a ray within the cone
+    /// meets before the farthest closest hit (bundle traversals only).
+    pub(crate) unseen: Vec<u32>,
     /// Working storage of bundle traversals: the node stack.
     pub(crate) stack: Vec<bvh::Pending>,
     /// Working storage of ray-by-ray tracing: one sub-ray's spans.
@@ -67,12 +73,6 @@ impl Nearest {
     pub fn prim(&self) -> Option<u32> {
         (self.prim != Self::NONE).then_some(self.prim)
     }
-
-    /// True without a hit.
-    #[inline]
-    pub fn is_miss(&self) -> bool {
-        self.prim == Self::NONE
-    }
 }
 
 impl PulseTrace {
@@ -80,6 +80,7 @@ impl PulseTrace {
     pub fn clear(&mut self) {
         self.hits.clear();
         self.volumes.clear();
+        self.unseen.clear();
     }
 
     /// Records the closest hit of the next sub-ray.
@@ -133,5 +134,17 @@ impl PulseTrace {
     /// surface, each once (a superset of those crossed).
     pub fn volumes(&self) -> &[u32] {
         &self.volumes
+    }
+
+    /// The surfaces within the cone of the sub-rays that no sub-ray has as
+    /// its closest hit, each once, in increasing order: a superset of the
+    /// primitives that a ray within the cone (and within the sub-rays'
+    /// direction bounds) meets nearer than the farthest closest hit, or
+    /// anywhere in range when a sub-ray has no hit. Only a bundle
+    /// traversal finds them ([`crate::accel::RayCaster::trace_pulse`] of a
+    /// [`crate::accel::Bvh`], two sub-rays or more); tracing ray by ray
+    /// leaves this empty.
+    pub fn unseen(&self) -> &[u32] {
+        &self.unseen
     }
 }

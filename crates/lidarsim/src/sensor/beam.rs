@@ -16,36 +16,87 @@
 //! on where the fixed rays land.
 //!
 //! **Cells and refinement.** Each sub-ray stands for a cell of the beam:
-//! the disk of solid angle `Ωᵢ = shareᵢ / I(rᵢ)` around it, `I` the beam's
-//! irradiance per steradian (the disk at most as wide as the distance to
-//! its neighbours). Where two neighbouring sub-rays see a discontinuity the
-//! receiver can resolve — closest hits more than the range resolution
-//! `c·FWHM/2` apart, or one a hit and the other a miss — the cells
-//! of both are sampled again by [`FINE_PER_CELL`] rays each, stratified
-//! over the disk and weighted by the irradiance there, the weights adding
-//! up to the cell's share ([`BeamPattern::fine_samples`]). A target smaller
-//! than a cell then returns power in proportion to the part of the cell it
-//! covers — its cross-section times the irradiance, so `R⁻⁴` for a point
-//! target — while an extended surface, whose cells are not refined, keeps
-//! the `R⁻²` of Eq. 2. A target that no coarse sub-ray meets is missed (it
-//! holds less than about one cell of the beam's energy); the jitter makes
-//! that a matter of chance in proportion to its size, not of where fixed
-//! rays fall.
+//! its Voronoi cell among the sub-rays, within the disk that holds
+//! 99.99 % of the energy (cells.rs), so that the cells tile the beam; a
+//! cell's energy is the Gaussian's over it ([`BeamPattern::cell_energy`]).
+//! Where two neighbouring sub-rays see a discontinuity the receiver can
+//! resolve — closest hits more than the range resolution `c·FWHM/2`
+//! apart, or one a hit and the other a miss — the cells of both are
+//! sampled again by a jittered grid of rays mapped onto the cell area for
+//! area and weighted by the irradiance there, the weights adding up to the
+//! cell's energy ([`BeamPattern::fine_samples`]); the sub-rays of the
+//! other cells share what is left.
+//!
+//! **Cone sampling.** A target between the sub-rays is found by the
+//! bundle traversal, which tests boxes and triangles against the cone of
+//! the sub-rays ([`crate::accel::PulseTrace::unseen`]); its outline in the
+//! pattern's plane ([`Outline`]), cut into the cells it meets, gives
+//! patches that are sampled by their own rays, each carrying its
+//! stratum's area times the irradiance at the ray
+//! ([`BeamPattern::patch_samples`]): the Gaussian beam's energy over the
+//! patch, taken from the cell's, whose sub-ray (or fine samples outside
+//! the patches) carries the rest (sim/cone.rs). A target smaller than a
+//! cell then returns the energy it intercepts — its cross-section times
+//! the irradiance, so `R⁻⁴` for a point target — in every pulse whose
+//! cone holds it, while an extended surface keeps the `R⁻²` of Eq. 2.
 //!
 //! With N = 1 the single ray is the beam's axis, neither jittered nor
 //! refined (the single-ray mode). Patterns of more than
 //! [`MAX_REFINED_SUBRAYS`] sub-rays sample the beam finely themselves and
 //! are not refined.
 
+mod cells;
+
+pub use cells::{Outline, PlanePoint};
+
 use crate::geometry::{DMat3, DVec3};
 use crate::rng::Stream;
+use cells::Cell;
 
 /// Precomputed jittered patterns (fewer for very large N, so that they take
 /// at most about 2¹⁶ sub-rays in all).
 pub const VARIANTS: usize = 64;
 
-/// Rays that sample a refined cell.
-pub const FINE_PER_CELL: usize = 16;
+/// How finely a refined cell is sampled: by a `k × k` jittered grid
+/// mapped onto it area for area.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Fineness {
+    /// 4 × 4 rays: what a resolved discontinuity asks for.
+    Rays16,
+    /// 8 × 8 rays.
+    Rays64,
+    /// 16 × 16 rays: for targets much narrower than their cell.
+    Rays256,
+}
+
+impl Fineness {
+    /// Every fineness, coarsest first.
+    pub const ALL: [Fineness; 3] = [Fineness::Rays16, Fineness::Rays64, Fineness::Rays256];
+
+    /// Rays along each side of the grid.
+    pub const fn side(self) -> usize {
+        match self {
+            Fineness::Rays16 => 4,
+            Fineness::Rays64 => 8,
+            Fineness::Rays256 => 16,
+        }
+    }
+
+    /// Rays that sample the cell.
+    pub const fn rays(self) -> usize {
+        self.side() * self.side()
+    }
+}
+
+/// Rays that sample a patch of a target between the sub-rays: a 2 × 2
+/// grid. All of them fall on a target whose outline is exact (a polygon
+/// or triangle), and four strata estimate the irradiance over a target
+/// much smaller than the beam to a few per cent in each pulse.
+pub const PATCH_RAYS: usize = 4;
+
+/// Enclosed power of the disk the cells tile: beyond it lies 0.01 % of the
+/// beam's energy (1/e² radius × 2.15).
+const CELLS_POWER: f64 = 0.9999;
 
 /// Largest pattern whose cells are refined.
 pub const MAX_REFINED_SUBRAYS: usize = 256;
@@ -77,17 +128,24 @@ pub struct BeamPattern {
     base: Vec<DVec3>,
     /// Energy share of each sub-ray (1/N).
     share: f64,
-    /// Angular radius of each sub-ray's cell, rad.
-    cell_radius: Vec<f64>,
+    /// Each sub-ray's cell (empty when the pattern is not refined).
+    cells: Vec<Cell>,
+    /// The share of the beam's energy within each cell (they add up to
+    /// 1; each near `share`, but not equal to it).
+    energy: Vec<f64>,
     /// Indices of each sub-ray's nearest neighbours (`u16::MAX`: none).
     neighbours: Vec<[u16; NEIGHBOURS]>,
-    /// Stratified points of the unit disk for the fine samples, this
-    /// pattern's own jitter.
-    disk: Vec<[f64; 2]>,
-    /// The fine samples of every cell, [`FINE_PER_CELL`] a cell in
-    /// sub-ray order (empty when cells are not refined): worked out once
-    /// with the pattern, not for each pulse that refines a cell.
-    fine: Vec<(DVec3, f64)>,
+    /// Per [`Fineness`], its jittered grid of the unit square (this
+    /// pattern's own jitter), which the fine samples map onto a cell.
+    grids: [Vec<[f64; 2]>; 3],
+    /// The jittered 2 × 2 grid of the unit square that a patch's samples
+    /// map onto it ([`BeamPattern::patch_samples`]).
+    patch_grid: [[f64; 2]; PATCH_RAYS],
+    /// Radius of the disk the cells tile (a tangent).
+    reach: f64,
+    /// The share of the beam's energy per unit of area of the pattern's
+    /// plane times `exp(−2(X² + Y²)/w²)`: the scale of [`Self::energy`].
+    norm: f64,
     /// 1/e² half-angle of the beam across (x), rad.
     w: f64,
     /// Ratio of the beam's along (y) to its across (x) divergence: the
@@ -127,8 +185,14 @@ impl TableRng {
 impl BeamPattern {
     /// A pattern of `n ≥ 2` equal-energy sub-rays of a beam of full
     /// divergence `divergence_rad` across and `stretch_y` times that along,
-    /// jittered by `rng`.
-    fn jittered(n: usize, divergence_rad: f64, stretch_y: f64, rng: &mut TableRng) -> Self {
+    /// jittered by `rng` (and its finer grids by `fine_rng`).
+    fn jittered(
+        n: usize,
+        divergence_rad: f64,
+        stretch_y: f64,
+        rng: &mut TableRng,
+        fine_rng: &mut TableRng,
+    ) -> Self {
         let w = 0.5 * divergence_rad;
         let golden = std::f64::consts::PI * (3.0 - 5.0f64.sqrt());
         let turn = rng.uniform() * std::f64::consts::TAU;
@@ -146,8 +210,11 @@ impl BeamPattern {
             .collect();
         let share = 1.0 / n as f64;
         let refined = n <= MAX_REFINED_SUBRAYS;
+        // The cells tile the disk that holds all but 0.01 % of the energy
+        // (the sub-rays reach 1.86 w, TAIL_CUT).
+        let reach = (w * (-(1.0 - CELLS_POWER).ln() / 2.0).sqrt()).tan();
         let mut neighbours = Vec::new();
-        let mut cell_radius = Vec::new();
+        let mut cells = Vec::new();
         if refined {
             for (i, o) in offsets.iter().enumerate() {
                 let mut near: Vec<(f64, usize)> = offsets
@@ -162,47 +229,70 @@ impl BeamPattern {
                     *slot = j as u16;
                 }
                 neighbours.push(nb);
-                // The disk of the cell's solid angle share / I(r), I the
-                // irradiance per steradian 2/(π w²)·exp(−2r²/w²), at most as
-                // wide as the distance to the nearest neighbour.
-                let r = o[0].hypot(o[1]).atan();
-                let irradiance =
-                    2.0 / (std::f64::consts::PI * w * w) * (-2.0 * r * r / (w * w)).exp();
-                let from_area = (share / irradiance / std::f64::consts::PI).sqrt();
-                let spacing = near.first().map_or(w, |n| n.0);
-                cell_radius.push(from_area.min(spacing));
+                cells.push(Cell::voronoi(&offsets, i, &near, reach));
             }
         }
-        // FINE_PER_CELL stratified points of the unit disk: a 4 × 4 grid of
-        // the square, jittered, mapped to the disk by Shirley and Chiu's
-        // concentric map (equal areas to equal areas).
-        let side = (FINE_PER_CELL as f64).sqrt() as usize;
-        let disk = (0..side * side)
-            .map(|k| {
-                let a = 2.0 * ((k % side) as f64 + rng.uniform()) / side as f64 - 1.0;
-                let b = 2.0 * ((k / side) as f64 + rng.uniform()) / side as f64 - 1.0;
-                concentric(a, b)
+        // Per fineness, k × k jittered points of the unit square, one in
+        // each of its k × k squares. The coarsest takes its jitter from
+        // `rng` (the same numbers as the disk points of earlier versions,
+        // so the next pattern's sub-rays stay the same), the others from
+        // `fine_rng`.
+        let grid = |k: usize, rng: &mut TableRng| -> Vec<[f64; 2]> {
+            (0..k * k)
+                .map(|j| {
+                    let a = ((j % k) as f64 + rng.uniform()) / k as f64;
+                    let b = ((j / k) as f64 + rng.uniform()) / k as f64;
+                    [a, b]
+                })
+                .collect()
+        };
+        let grids = [
+            grid(Fineness::Rays16.side(), rng),
+            grid(Fineness::Rays64.side(), fine_rng),
+            grid(Fineness::Rays256.side(), fine_rng),
+        ];
+        // The patches' 2 × 2 grid takes the jitter of the first four
+        // points of the coarsest grid, each within its own quarter.
+        let patch_grid = std::array::from_fn(|j| {
+            let [a, b] = grids[0][j];
+            let side = Fineness::Rays16.side() as f64;
+            let u = a * side - (j % Fineness::Rays16.side()) as f64;
+            let v = b * side - (j / Fineness::Rays16.side()) as f64;
+            [((j % 2) as f64 + u) / 2.0, ((j / 2) as f64 + v) / 2.0]
+        });
+        // Each cell's share of the energy: its area times the mean
+        // irradiance over the finest grid's points, the shares scaled to
+        // add up to 1 (the 0.01 % beyond the cells goes to them).
+        let irradiance = |x: PlanePoint| (-2.0 * (x[0] * x[0] + x[1] * x[1]) / (w * w)).exp();
+        let mut energy: Vec<f64> = cells
+            .iter()
+            .map(|c| {
+                let sum: f64 = grids[2]
+                    .iter()
+                    .map(|&[a, b]| irradiance(c.sample(a, b)))
+                    .sum();
+                c.area() * sum / grids[2].len() as f64
             })
             .collect();
-        let mut pattern = Self {
+        let total: f64 = energy.iter().sum();
+        for e in &mut energy {
+            *e /= total;
+        }
+        let norm = if total > 0.0 { 1.0 / total } else { 0.0 };
+        Self {
             offsets,
             base,
             share,
-            cell_radius,
+            cells,
+            energy,
             neighbours,
-            disk,
-            fine: Vec::new(),
+            grids,
+            patch_grid,
+            reach,
+            norm,
             w,
             stretch_y,
-        };
-        if refined {
-            let mut fine = Vec::with_capacity(n * FINE_PER_CELL);
-            for i in 0..n {
-                pattern.work_out_fine_samples(i, &mut fine);
-            }
-            pattern.fine = fine;
         }
-        pattern
     }
 
     /// The single central ray.
@@ -211,10 +301,13 @@ impl BeamPattern {
             offsets: vec![[0.0, 0.0]],
             base: vec![DVec3::Z],
             share: 1.0,
-            cell_radius: Vec::new(),
+            cells: Vec::new(),
+            energy: Vec::new(),
             neighbours: Vec::new(),
-            disk: Vec::new(),
-            fine: Vec::new(),
+            grids: [Vec::new(), Vec::new(), Vec::new()],
+            patch_grid: [[0.5; 2]; PATCH_RAYS],
+            reach: 0.0,
+            norm: 0.0,
             w: 0.0,
             stretch_y: 1.0,
         }
@@ -260,47 +353,157 @@ impl BeamPattern {
             .map(|&j| usize::from(j))
     }
 
-    /// The [`FINE_PER_CELL`] rays sampling the cell of sub-ray `i`, as
-    /// (undeflected unit direction, energy share) appended to `out`: spread
-    /// evenly over the cell's disk and weighted by the beam's irradiance at
-    /// each, the shares adding up to the sub-ray's.
-    pub fn fine_samples(&self, i: usize, out: &mut Vec<(DVec3, f64)>) {
-        out.extend_from_slice(&self.fine[i * FINE_PER_CELL..(i + 1) * FINE_PER_CELL]);
+    /// The share of the beam's energy within the cell of sub-ray `i`.
+    pub fn cell_energy(&self, i: usize) -> f64 {
+        self.energy[i]
     }
 
-    /// [`BeamPattern::fine_samples`] worked out, for the pattern's table.
-    fn work_out_fine_samples(&self, i: usize, out: &mut Vec<(DVec3, f64)>) {
-        let o = self.offsets[i];
-        let rho = self.cell_radius[i];
+    /// The rays sampling the cell of sub-ray `i` at `fineness`, as
+    /// (undeflected unit direction, energy share) appended to `out`: spread
+    /// evenly over the cell and weighted by the beam's irradiance at each,
+    /// the shares adding up to the cell's energy
+    /// ([`BeamPattern::cell_energy`]).
+    pub fn fine_samples(&self, i: usize, fineness: Fineness, out: &mut Vec<(DVec3, f64)>) {
+        let cell = &self.cells[i];
         let start = out.len();
         let mut sum = 0.0;
-        for d in &self.disk {
-            let (x, y) = (o[0] + rho * d[0], o[1] + rho * d[1]);
-            let r2 = x * x + y * y;
-            let weight = (-2.0 * r2 / (self.w * self.w)).exp();
+        for &[a, b] in &self.grids[fineness as usize] {
+            let [x, y] = cell.sample(a, b);
+            let weight = (-2.0 * (x * x + y * y) / (self.w * self.w)).exp();
             sum += weight;
             out.push((DVec3::new(x, self.stretch_y * y, 1.0).normalize(), weight));
         }
-        let scale = self.share / sum;
+        let scale = self.energy[i] / sum;
         for s in &mut out[start..] {
             s.1 *= scale;
         }
     }
-}
 
-/// Shirley and Chiu's concentric map of the square `[−1, 1]²` to the unit
-/// disk ("A low distortion map between disk and square", 1997).
-fn concentric(a: f64, b: f64) -> [f64; 2] {
-    if a == 0.0 && b == 0.0 {
-        return [0.0, 0.0];
+    /// The rays sampling the part of cell `i` where `keep` holds, as
+    /// [`BeamPattern::fine_samples`] samples the whole cell but with the
+    /// samples outside that part left out and the shares of the others
+    /// adding up to `energy`. Returns how many it appended (none when no
+    /// sample lies in the part).
+    pub fn fine_samples_where(
+        &self,
+        i: usize,
+        fineness: Fineness,
+        keep: impl Fn(PlanePoint) -> bool,
+        energy: f64,
+        out: &mut Vec<(DVec3, f64)>,
+    ) -> usize {
+        let cell = &self.cells[i];
+        let start = out.len();
+        let mut sum = 0.0;
+        for &[a, b] in &self.grids[fineness as usize] {
+            let x = cell.sample(a, b);
+            if !keep(x) {
+                continue;
+            }
+            let weight = self.irradiance(x);
+            sum += weight;
+            out.push((self.direction(x), weight));
+        }
+        if sum > 0.0 {
+            let scale = energy / sum;
+            for s in &mut out[start..] {
+                s.1 *= scale;
+            }
+        }
+        out.len() - start
     }
-    let quarter = std::f64::consts::FRAC_PI_4;
-    let (r, phi) = if a.abs() > b.abs() {
-        (a, quarter * (b / a))
-    } else {
-        (b, 2.0 * quarter - quarter * (a / b))
-    };
-    [r * phi.cos(), r * phi.sin()]
+
+    /// The area of cell `i` in the pattern's plane.
+    pub fn cell_area(&self, i: usize) -> f64 {
+        self.cells[i].area()
+    }
+
+    /// The sub-ray of cell `i`, in the pattern's plane.
+    pub fn site(&self, i: usize) -> PlanePoint {
+        self.offsets[i]
+    }
+
+    /// The rays sampling the convex `patch` of the pattern's plane (within
+    /// the cells, with an area), as (undeflected unit direction, energy
+    /// share) appended to `out`: a 2 × 2 jittered grid (this pattern's)
+    /// mapped onto it area for area, each ray carrying its stratum's area
+    /// times the beam's irradiance at the ray — the Gaussian beam's energy
+    /// over the patch, by stratified quadrature. The rays where `keep`
+    /// fails are left out, so that their sum, which it returns, is that
+    /// energy over the part of the patch where `keep` holds (in
+    /// expectation over the jitter).
+    pub fn patch_samples(
+        &self,
+        patch: &Outline,
+        keep: impl Fn(PlanePoint) -> bool,
+        out: &mut Vec<(DVec3, f64)>,
+    ) -> f64 {
+        let grid = &self.patch_grid;
+        let stratum = patch.area() / grid.len() as f64 * self.norm;
+        let mut sum = 0.0;
+        for &[a, b] in grid {
+            let x = patch.sample(a, b);
+            if !keep(x) {
+                continue;
+            }
+            let share = stratum * self.irradiance(x);
+            sum += share;
+            out.push((self.direction(x), share));
+        }
+        sum
+    }
+
+    /// Makes `outline` its part within cell `i`.
+    pub fn clip_to_cell(&self, i: usize, outline: &mut Outline) {
+        outline.clip_to_cell(&self.cells[i]);
+    }
+
+    /// The beam's relative irradiance at `x`, 1 on the axis.
+    #[inline]
+    fn irradiance(&self, x: PlanePoint) -> f64 {
+        (-2.0 * (x[0] * x[0] + x[1] * x[1]) / (self.w * self.w)).exp()
+    }
+
+    /// The undeflected unit direction through `x`.
+    #[inline]
+    fn direction(&self, x: PlanePoint) -> DVec3 {
+        DVec3::new(x[0], self.stretch_y * x[1], 1.0).normalize()
+    }
+
+    /// The point of the pattern's plane where the undeflected beam frame's
+    /// point `q` lies (`q.z > 0`): the sub-ray through it has direction
+    /// `(X, stretch·Y, 1)`.
+    #[inline]
+    pub fn plane_point(&self, q: DVec3) -> PlanePoint {
+        [q.x / q.z, q.y / (self.stretch_y * q.z)]
+    }
+
+    /// Makes `outline` the convex hull of the points pushed to it, within
+    /// the square around the cells.
+    pub fn close_outline(&self, outline: &mut Outline) {
+        outline.close(self.reach);
+    }
+
+    /// Whether cell `i` meets the convex `outline`.
+    pub fn cell_meets(&self, i: usize, outline: &Outline) -> bool {
+        self.cells[i].meets(outline)
+    }
+
+    /// Lower and upper bounds of `n · (X, stretch·Y, 1)` over the points
+    /// `(X, Y)` of cell `i` (`None`: over all cells), the directions of a
+    /// plane's normal `n` times the beam's unnormalised directions there:
+    /// a plane `n·q = c` of the beam frame lies at depth `q.z = c / (n ·
+    /// (X, stretch·Y, 1))` along them.
+    pub fn normal_range(&self, i: Option<usize>, n: DVec3) -> (f64, f64) {
+        let (centre, radius) = match i {
+            Some(i) => self.cells[i].disk(),
+            None => ([0.0, 0.0], self.reach * std::f64::consts::SQRT_2),
+        };
+        let (gx, gy) = (n.x, n.y * self.stretch_y);
+        let mid = gx * centre[0] + gy * centre[1] + n.z;
+        let half = radius * gx.hypot(gy);
+        (mid - half, mid + half)
+    }
 }
 
 impl Beam {
@@ -327,9 +530,12 @@ impl Beam {
         }
         let count = (65_536 / n).clamp(1, VARIANTS);
         let mut rng = TableRng(0x6265_616D);
+        let mut fine_rng = TableRng(0x6669_6E65);
         Self {
             variants: (0..count)
-                .map(|_| BeamPattern::jittered(n, divergence_rad, stretch_y, &mut rng))
+                .map(|_| {
+                    BeamPattern::jittered(n, divergence_rad, stretch_y, &mut rng, &mut fine_rng)
+                })
                 .collect(),
             sampled: true,
         }
@@ -358,152 +564,4 @@ impl Beam {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// Enclosed power of the Gaussian beam within off-axis angle `r`.
-    fn enclosed(r: f64, w: f64) -> f64 {
-        1.0 - (-2.0 * r * r / (w * w)).exp()
-    }
-
-    /// An elliptical beam (1 mrad across, 3 mrad along): the energy's
-    /// spread along y is three times that across, for the sub-rays and for
-    /// the fine samples of their cells (a Gaussian `exp(−2x²/wx² −
-    /// 2y²/wy²)` has second moments `w²/4` on each axis).
-    #[test]
-    fn an_elliptical_beam_spreads_by_its_two_divergences() {
-        let (across, along) = (1e-3, 3e-3);
-        let beam = Beam::elliptical(64, across, along);
-        let (mut xx, mut yy) = (0.0, 0.0);
-        let (mut fxx, mut fyy, mut fsum) = (0.0, 0.0, 0.0);
-        let mut fine = Vec::new();
-        for p in beam.patterns() {
-            for (i, d) in p.base_directions().iter().enumerate() {
-                xx += d.x * d.x;
-                yy += d.y * d.y;
-                fine.clear();
-                p.fine_samples(i, &mut fine);
-                for (f, share) in &fine {
-                    fxx += share * f.x * f.x;
-                    fyy += share * f.y * f.y;
-                    fsum += share;
-                }
-            }
-        }
-        let n = (beam.patterns().len() * 64) as f64;
-        let want = |w: f64| (w / 2.0).powi(2) / 4.0;
-        // Each stratum's sub-ray lies inside it, and the tails beyond
-        // 99.9 % of the energy are cut: the spread of a pattern is some
-        // 10 % short of the whole Gaussian's, the same on both axes.
-        for (got, w) in [
-            (xx / n, across),
-            (yy / n, along),
-            (fxx / fsum, across),
-            (fyy / fsum, along),
-        ] {
-            assert!(
-                (got / want(w) - 0.95).abs() < 0.1,
-                "{got} against {}",
-                want(w)
-            );
-        }
-        assert!(
-            ((yy / xx).sqrt() - 3.0).abs() < 0.03,
-            "{}",
-            (yy / xx).sqrt()
-        );
-        assert!(
-            ((fyy / fxx).sqrt() - 3.0).abs() < 0.03,
-            "{}",
-            (fyy / fxx).sqrt()
-        );
-    }
-
-    #[test]
-    fn sub_rays_follow_the_gaussian_profile_with_its_tails() {
-        let div = 0.5e-3;
-        let w = div / 2.0;
-        let beam = Beam::new(19, div);
-        assert_eq!(beam.patterns().len(), VARIANTS);
-        // Over all patterns, the share of sub-rays within radius r is the
-        // enclosed power, tails beyond 1/e² included (to 99.9 %).
-        let angles: Vec<f64> = beam
-            .patterns()
-            .iter()
-            .flat_map(|p| p.off_axis_angles())
-            .collect();
-        for frac in [0.25, 0.5, 0.75, 1.0, 1.3] {
-            let want = enclosed(frac * w, w);
-            let got = angles.iter().filter(|&&a| a < frac * w).count() as f64 / angles.len() as f64;
-            assert!((got - want).abs() < 0.02, "r = {frac} w: {got} vs {want}");
-        }
-        // 13.5 % of the energy lies beyond 1/e².
-        let beyond = angles.iter().filter(|&&a| a > w).count() as f64 / angles.len() as f64;
-        assert!((beyond - (-2.0f64).exp()).abs() < 0.02, "{beyond}");
-        // Each pattern is stratified: one sub-ray per energy stratum.
-        for p in beam.patterns() {
-            let mut e: Vec<f64> = p.off_axis_angles().map(|a| enclosed(a, w)).collect();
-            e.sort_by(f64::total_cmp);
-            for (i, x) in e.iter().enumerate() {
-                assert!(*x >= i as f64 / 19.0 - 1e-9 && *x <= (i + 1) as f64 / 19.0 + 1e-9);
-            }
-            assert!(p.off_axis_angles().all(|a| a <= 1.87 * w));
-        }
-    }
-
-    #[test]
-    fn fine_samples_carry_the_cell_share_inside_the_cell() {
-        let beam = Beam::new(19, 0.3e-3);
-        for p in beam.patterns().iter().take(4) {
-            assert!(p.refined());
-            let mut out = Vec::new();
-            for i in 0..p.len() {
-                out.clear();
-                p.fine_samples(i, &mut out);
-                assert_eq!(out.len(), FINE_PER_CELL);
-                let total: f64 = out.iter().map(|s| s.1).sum();
-                assert!((total - p.share()).abs() < 1e-12);
-                let centre = p.base_directions()[i];
-                for (d, _) in &out {
-                    assert!((d.length() - 1.0).abs() < 1e-12);
-                    assert!(d.angle_between(centre) <= p.cell_radius[i] * 1.0001 + 1e-12);
-                }
-                assert_eq!(p.neighbours(i).count(), NEIGHBOURS);
-            }
-        }
-    }
-
-    #[test]
-    fn one_sub_ray_is_the_axis_and_draws_nothing() {
-        let beam = Beam::new(1, 1e-3);
-        let p = beam.for_pulse(|| unreachable!("no random number is drawn"));
-        assert_eq!(p.base_directions(), &[DVec3::Z]);
-        assert!(!p.refined());
-    }
-
-    #[test]
-    fn concentric_map_covers_the_disk_evenly() {
-        // Equal areas of the square map to equal areas of the disk: the
-        // share of a fine grid's images within radius r is r².
-        let n = 200;
-        let pts: Vec<[f64; 2]> = (0..n * n)
-            .map(|k| {
-                let a = 2.0 * ((k % n) as f64 + 0.5) / n as f64 - 1.0;
-                let b = 2.0 * ((k / n) as f64 + 0.5) / n as f64 - 1.0;
-                concentric(a, b)
-            })
-            .collect();
-        for r in [0.3, 0.6, 0.9] {
-            let got = pts.iter().filter(|p| p[0].hypot(p[1]) < r).count() as f64 / pts.len() as f64;
-            assert!((got - r * r).abs() < 0.01, "{r}: {got}");
-        }
-        assert!(pts.iter().all(|p| p[0].hypot(p[1]) <= 1.0 + 1e-12));
-    }
-
-    #[test]
-    fn deflection_takes_the_axis_to_the_beam() {
-        let m = deflection(0.3);
-        let want = DVec3::new(0.3f64.sin(), 0.0, 0.3f64.cos());
-        assert!((m * DVec3::Z - want).length() < 1e-15);
-    }
-}
+mod tests;

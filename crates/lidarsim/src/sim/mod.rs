@@ -9,6 +9,7 @@
 //! [`Executor`], so the output is the same for any number of threads and
 //! memory does not grow with the length of the flight.
 
+mod cone;
 mod executor;
 mod frames;
 pub mod parts;

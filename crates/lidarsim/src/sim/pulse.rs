@@ -26,7 +26,7 @@ use crate::radiometry::surface_return;
 use crate::rng::{Purpose, Stream};
 use crate::scene::{MEDIUM_VEGETATION_MAX_M, Shape, SurfaceClass};
 use crate::sensor::Pose;
-use crate::sensor::beam::{BeamPattern, FINE_PER_CELL};
+use crate::sensor::beam::{BeamPattern, Fineness};
 use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
 use crate::waveform::Return;
@@ -75,17 +75,34 @@ struct Emission {
     to_world: DMat3,
 }
 
+/// How stage 2 sampled a pulse's beam.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Sampling {
+    /// By the pattern's sub-rays, each carrying the pattern's share.
+    Coarse,
+    /// Some cells sampled again (across a discontinuity, or where a
+    /// surface lies between the sub-rays, cone.rs): their fine samples
+    /// carry each cell's own energy ([`BeamPattern::cell_energy`]), and
+    /// the other sub-rays what is left, `share` each, so that the pulse's
+    /// energy stays whole.
+    Refined {
+        /// Energy share of each sub-ray whose cell is not sampled again.
+        share: f64,
+    },
+}
+
 /// The sub-rays of a pulse in emission order: the pattern's, each cell
 /// sampled again replaced by its fine samples.
 struct Rays<'a> {
     dirs: &'a [DVec3],
     trace: &'a PulseTrace,
-    /// Which cells are sampled again (empty when none is).
-    refine: &'a [bool],
+    /// How many fine samples stand for each cell, 0 for its sub-ray
+    /// (empty when no cell is sampled again).
+    counts: &'a [u32],
     fine: &'a [(DVec3, f64)],
     fine_dirs: &'a [DVec3],
     fine_trace: &'a PulseTrace,
-    /// Energy share of a pattern sub-ray.
+    /// Energy share of a pattern sub-ray not sampled again.
     share: f64,
 }
 
@@ -96,8 +113,9 @@ impl Rays<'_> {
     fn each(&self, mut f: impl FnMut(&DVec3, f64, Option<Hit>)) {
         let mut j = 0;
         for (i, dir) in self.dirs.iter().enumerate() {
-            if self.refine.get(i).copied().unwrap_or(false) {
-                for _ in 0..FINE_PER_CELL {
+            let count = self.counts.get(i).copied().unwrap_or(0);
+            if count > 0 {
+                for _ in 0..count {
                     let (dir, share) = (&self.fine_dirs[j], self.fine[j].1);
                     f(dir, share, self.fine_trace.hit(j));
                     j += 1;
@@ -129,8 +147,8 @@ impl Simulator<'_> {
         };
         let c = usize::from(em.channel.index);
         let pattern = self.beams[c.min(self.beams.len() - 1)].for_pulse(|| stream(Purpose::Beam));
-        let refined = self.cast(&em, pattern, scratch);
-        self.gather_returns(&em, pattern, refined, scratch, &stream);
+        let sampling = self.cast(&em, pattern, scratch);
+        self.gather_returns(&em, pattern, sampling, scratch, &stream);
         if scratch.returns.is_empty() {
             scratch.waveform.samples.clear();
             scratch.echoes.clear();
@@ -187,13 +205,15 @@ impl Simulator<'_> {
 
     /// Stage 2: the sub-rays of `pattern`, in the world frame, cast as one
     /// pulse; the cells across a discontinuity the receiver resolves
-    /// sampled again, finely (beam.rs). Returns whether any was.
+    /// sampled again, finely (beam.rs).
     #[inline(always)]
-    fn cast(&self, em: &Emission, pattern: &BeamPattern, scratch: &mut Scratch) -> bool {
+    fn cast(&self, em: &Emission, pattern: &BeamPattern, scratch: &mut Scratch) -> Sampling {
         let Scratch {
             dirs,
             trace,
             refine,
+            counts,
+            cone,
             fine,
             fine_dirs,
             fine_trace,
@@ -208,18 +228,20 @@ impl Simulator<'_> {
         );
         self.caster
             .trace_pulse(em.origin, dirs, t_min, t_max, trace);
-        let refined = pattern.refined() && self.mark_discontinuities(pattern, trace, refine);
-        if refined {
-            fine.clear();
-            for (i, _) in refine.iter().enumerate().filter(|(_, r)| **r) {
-                pattern.fine_samples(i, fine);
-            }
-            fine_dirs.clear();
-            fine_dirs.extend(fine.iter().map(|(d, _)| to_world * *d));
-            self.caster
-                .trace_pulse(em.origin, fine_dirs, t_min, t_max, fine_trace);
+        let marked = pattern.refined() && self.mark_discontinuities(pattern, trace, refine);
+        let marked = if marked { &refine[..] } else { &[] };
+        let patched = pattern.refined()
+            && (!trace.unseen().is_empty() || !marked.is_empty())
+            && self.find_patches((em.origin, to_world), pattern, trace, marked, cone);
+        if marked.is_empty() && !patched {
+            return Sampling::Coarse;
         }
-        refined
+        let share = Self::sample_cells(pattern, marked, cone, fine, counts);
+        fine_dirs.clear();
+        fine_dirs.extend(fine.iter().map(|(d, _)| to_world * *d));
+        self.caster
+            .trace_pulse(em.origin, fine_dirs, t_min, t_max, fine_trace);
+        Sampling::Refined { share }
     }
 
     /// Stage 3: each sub-ray through the crowns on its way (the
@@ -230,14 +252,14 @@ impl Simulator<'_> {
         &self,
         em: &Emission,
         pattern: &BeamPattern,
-        refined: bool,
+        sampling: Sampling,
         scratch: &mut Scratch,
         stream: &impl Fn(Purpose) -> Stream,
     ) {
         let Scratch {
             dirs,
             trace,
-            refine,
+            counts,
             fine,
             fine_dirs,
             fine_trace,
@@ -268,7 +290,10 @@ impl Simulator<'_> {
                 mat.incidence_exponent,
             )
         };
-        let share = pattern.share();
+        let (refined, share) = match sampling {
+            Sampling::Coarse => (false, pattern.share()),
+            Sampling::Refined { share } => (true, share),
+        };
         if !refined && trace.has_no_volumes() {
             // No crown on any sub-ray's way and no cell sampled again:
             // every sub-ray brings all its energy to its surface.
@@ -298,7 +323,7 @@ impl Simulator<'_> {
         let rays = Rays {
             dirs,
             trace,
-            refine: if refined { refine } else { &[] },
+            counts: if refined { counts } else { &[] },
             fine,
             fine_dirs,
             fine_trace,
@@ -521,7 +546,7 @@ impl Simulator<'_> {
         &self,
         pattern: &BeamPattern,
         trace: &PulseTrace,
-        refine: &mut Vec<bool>,
+        refine: &mut Vec<Option<Fineness>>,
     ) -> bool {
         let n = pattern.len();
         // The usual case: every sub-ray meets one continuous surface.
@@ -530,7 +555,7 @@ impl Simulator<'_> {
             return false;
         }
         refine.clear();
-        refine.resize(n, false);
+        refine.resize(n, None);
         let differ = |a: f64, b: f64| {
             a.is_finite() != b.is_finite()
                 || (a.is_finite() && (a - b).abs() > self.discontinuity_m)
@@ -540,8 +565,8 @@ impl Simulator<'_> {
             let a = trace.range(i);
             for j in pattern.neighbours(i) {
                 if differ(a, trace.range(j)) {
-                    refine[i] = true;
-                    refine[j] = true;
+                    refine[i] = Some(Fineness::Rays16);
+                    refine[j] = Some(Fineness::Rays16);
                     any = true;
                 }
             }

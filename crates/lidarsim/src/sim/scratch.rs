@@ -16,8 +16,12 @@ pub(crate) struct Scratch {
     pub(super) dirs: Vec<DVec3>,
     /// Their closest hits and the crowns on their way.
     pub(super) trace: PulseTrace,
-    /// Which sub-rays' cells are sampled again.
-    pub(super) refine: Vec<bool>,
+    /// How finely each sub-ray's cell is sampled again, if it is.
+    pub(super) refine: Vec<Option<crate::sensor::beam::Fineness>>,
+    /// How many fine samples stand for each sub-ray's cell (0: none).
+    pub(super) counts: Vec<u32>,
+    /// Working storage of the sampling of the beam's cone.
+    pub(super) cone: super::cone::ConeScratch,
     /// The fine samples of those cells: undeflected direction and share.
     pub(super) fine: Vec<(DVec3, f64)>,
     /// Their directions in the world frame.

@@ -6,6 +6,13 @@
 //! the leaves reached; a triangle the whole cone misses costs only its
 //! edge planes, one it covers skips the per-ray edge tests. The answers
 //! are those of [`crate::accel::RayCaster::trace`] for each sub-ray.
+//!
+//! A surface that the cone may meet (its triangle's edge planes, its
+//! stem's bounding cylinder or its box do not rule the cone out) but that
+//! no sub-ray records, or that loses every sub-ray it recorded to a nearer
+//! one, is kept as unseen ([`PulseTrace::unseen`]): a target between the
+//! sub-rays, which the simulator samples finely. A flat scene whose
+//! sub-rays all meet one surface keeps none, at the cost of a test.
 
 use super::ray::nearest_on_top;
 use super::{Bvh, Pending};
@@ -35,11 +42,13 @@ impl Bvh {
         let (axis, spread) = bundle_cone(dirs, sum);
         let cone = EdgeCone::new(origin, axis, spread);
         let mut volumes = std::mem::take(&mut out.volumes);
+        let mut unseen = std::mem::take(&mut out.unseen);
         best.resize(dirs.len(), Nearest::miss(t_max));
         for b in &mut best {
             b.reset(t_max);
         }
         volumes.clear();
+        unseen.clear();
         let mut missing = dirs.len();
         // Whether a hit on a primitive other than a triangle (recorded
         // without its normal) was ever recorded.
@@ -66,25 +75,21 @@ impl Bvh {
                         continue;
                     }
                     if let Shape::Triangle(tri) = &prim.shape {
-                        missing -= bundle_triangle(tri, p, dirs, &cone, t_min, &mut best);
+                        missing -=
+                            bundle_triangle(tri, p, dirs, &cone, t_min, &mut best, &mut unseen);
                         continue;
                     }
-                    // A stem the whole cone misses costs one test.
-                    if let Some(cylinder) = prim.bounds_cylinder()
-                        && !cylinder.may_meet_cone(origin, axis, spread, t_min, far)
-                    {
-                        continue;
-                    }
-                    for (dir, b) in dirs.iter().zip(best.iter_mut()) {
-                        let ray = Ray { origin, dir: *dir };
-                        if let Some(t) = prim.intersect(&ray, t_min, b.t) {
-                            if b.is_miss() {
-                                missing -= 1;
-                            }
-                            *b = Nearest::hit(t, p, DVec3::NAN);
-                            normals_missing = true;
-                        }
-                    }
+                    let (first, normal_less) = bundle_other(
+                        prim,
+                        p,
+                        (origin, axis, spread),
+                        dirs,
+                        (t_min, far),
+                        &mut best,
+                        &mut unseen,
+                    );
+                    missing -= first;
+                    normals_missing |= normal_less;
                 }
                 if missing == 0 {
                     far = best
@@ -157,8 +162,15 @@ impl Bvh {
             let cone = (axis, spread);
             self.keep_volumes_reached(origin, cone, t_min, &best, &mut volumes);
         }
+        // The unseen: each once, none that some sub-ray hit in the end.
+        if !unseen.is_empty() {
+            unseen.sort_unstable();
+            unseen.dedup();
+            unseen.retain(|&p| best.iter().all(|b| b.prim() != Some(p)));
+        }
         out.hits = best;
         out.volumes = volumes;
+        out.unseen = unseen;
     }
 
     /// The normals of the hits recorded without one, facing the ray.
@@ -211,6 +223,55 @@ impl Bvh {
     }
 }
 
+/// Records primitive `p` (not a triangle nor a volume) for every ray of
+/// `dirs` that meets it nearer than its best so far, within `(t_min,
+/// far)`: a stem the whole cone from `origin` of `(axis, spread)` misses
+/// costs one test.
+/// The primitives whose records it takes go to `unseen`, and `p` itself
+/// when it records none but the cone may meet it (a stem within its
+/// cylinder's test, another surface within its box's). Returns how many
+/// rays got their first hit, and whether it recorded any (without its
+/// normal).
+#[inline]
+fn bundle_other(
+    prim: &crate::scene::Primitive,
+    p: u32,
+    (origin, axis, spread): (DVec3, DVec3, f64),
+    dirs: &[DVec3],
+    (t_min, far): (f64, f64),
+    best: &mut [Nearest],
+    unseen: &mut Vec<u32>,
+) -> (usize, bool) {
+    let cylinder = prim.bounds_cylinder();
+    if let Some(c) = cylinder
+        && !c.may_meet_cone(origin, axis, spread, t_min, far)
+    {
+        return (0, false);
+    }
+    let (mut first, mut recorded) = (0, false);
+    for (dir, b) in dirs.iter().zip(best.iter_mut()) {
+        let ray = Ray { origin, dir: *dir };
+        if let Some(t) = prim.intersect(&ray, t_min, b.t) {
+            match b.prim() {
+                Some(q) => unseen.push(q),
+                None => first += 1,
+            }
+            *b = Nearest::hit(t, p, DVec3::NAN);
+            recorded = true;
+        }
+    }
+    if !recorded
+        && (cylinder.is_some()
+            || prim
+                .bounds()
+                .cone_interval(origin, axis, spread, t_min, far)
+                .is_some())
+    {
+        unseen.push(p);
+    }
+    (first, recorded)
+}
+
 /// The fan of `tri` from the cone's origin with its edge planes only
 /// ([`TriangleFan::edges`]) and what its coverage leaves to test per ray
 /// (`None`: every ray passes the edge tests), unless the cone misses the
@@ -234,7 +295,9 @@ pub(super) fn fan(cone: &EdgeCone, tri: &Triangle) -> Option<(TriangleFan, Optio
 /// hit. `cone` is the bundle's origin, axis and
 /// spread: a triangle the whole bundle misses costs only its edge planes,
 /// one it covers skips the per-ray edge tests, and for one it straddles
-/// each ray is tested on the straddled edges only.
+/// each ray is tested on the straddled edges only. A triangle the cone may
+/// meet but no ray records goes to `unseen`, as does every primitive a
+/// ray's record is taken from.
 #[inline]
 fn bundle_triangle(
     tri: &Triangle,
@@ -243,6 +306,7 @@ fn bundle_triangle(
     cone: &EdgeCone,
     t_min: f64,
     best: &mut [Nearest],
+    unseen: &mut Vec<u32>,
 ) -> usize {
     let Some((mut fan, straddle)) = fan(cone, tri) else {
         return 0;
@@ -250,18 +314,21 @@ fn bundle_triangle(
     fan.complete(tri);
     // One loop per kind of test, so that each runs without deciding again.
     let f = &fan;
+    let u = unseen;
     match straddle.map(|s| fan.edge_test(s)) {
-        None => record_hits(f, p, dirs, t_min, best, &|_| true),
-        Some(EdgeTest::One(a)) => record_hits(f, p, dirs, t_min, best, &|d| d.dot(a) >= 0.0),
-        Some(EdgeTest::Two(a, b)) => record_hits(f, p, dirs, t_min, best, &|d| {
+        None => record_hits(f, p, dirs, t_min, best, u, &|_| true),
+        Some(EdgeTest::One(a)) => record_hits(f, p, dirs, t_min, best, u, &|d| d.dot(a) >= 0.0),
+        Some(EdgeTest::Two(a, b)) => record_hits(f, p, dirs, t_min, best, u, &|d| {
             d.dot(a) >= 0.0 && d.dot(b) >= 0.0
         }),
-        Some(EdgeTest::Three) => record_hits(f, p, dirs, t_min, best, &|d| f.passes(d)),
+        Some(EdgeTest::Three) => record_hits(f, p, dirs, t_min, best, u, &|d| f.passes(d)),
     }
 }
 
 /// Records `fan`'s triangle `p` for every ray that `passes` and meets it
 /// closer than its best so far; returns how many rays got their first hit.
+/// The primitives whose records it takes go to `unseen`, and `p` itself
+/// when it records none.
 #[inline(always)]
 fn record_hits(
     fan: &TriangleFan,
@@ -269,17 +336,26 @@ fn record_hits(
     dirs: &[DVec3],
     t_min: f64,
     best: &mut [Nearest],
+    unseen: &mut Vec<u32>,
     passes: &impl Fn(DVec3) -> bool,
 ) -> usize {
     let mut first = 0;
+    let mut recorded = false;
     for (d, slot) in dirs.iter().zip(best.iter_mut()) {
         if !passes(*d) {
             continue;
         }
         if let Some((t, normal)) = fan.hit(*d, t_min, slot.t) {
-            first += usize::from(slot.is_miss());
+            match slot.prim() {
+                Some(q) => unseen.push(q),
+                None => first += 1,
+            }
             *slot = Nearest::hit(t, p, normal);
+            recorded = true;
         }
+    }
+    if !recorded {
+        unseen.push(p);
     }
     first
 }

@@ -323,6 +323,35 @@ fn triangle_coverage_is_the_scenes_definition() {
     assert!(seen.iter().all(|&n| n > 1000), "{seen:?}");
 }
 
+/// Directions between the sub-rays `dirs`: within their cone (distance
+/// from the mean direction at most the largest sub-ray's) and within their
+/// per-axis bounds, the region a bundle traversal searches.
+fn between(dirs: &[DVec3], seed: u64) -> Vec<DVec3> {
+    let mut s = crate::rng::Stream::new(seed, 9, 0, crate::rng::Purpose::Test);
+    let sum = dirs.iter().fold(DVec3::ZERO, |a, d| a + *d);
+    let axis = sum / dirs.len() as f64;
+    let spread = dirs
+        .iter()
+        .map(|d| (*d - axis).length())
+        .fold(0.0, f64::max);
+    let bounds = crate::kernels::direction_bounds(dirs);
+    let inside = |d: DVec3| {
+        (d - axis).length() <= spread
+            && (0..3).all(|a| d[a] >= bounds.lo[a] && d[a] <= bounds.hi[a])
+    };
+    let (u, v) = (
+        axis.any_orthonormal_vector(),
+        axis.cross(axis.any_orthonormal_vector()),
+    );
+    (0..400)
+        .map(|_| {
+            let (a, b) = (s.uniform() * 2.0 - 1.0, s.uniform() * 2.0 - 1.0);
+            (axis + (u * a + v * b) * spread).normalize()
+        })
+        .filter(|d| inside(*d))
+        .collect()
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
     /// The bundle traversal gives every sub-ray the hit that tracing it
@@ -366,6 +395,26 @@ proptest! {
                 let hit_t = want.map_or(1e4, |h| h.t);
                 crate::accel::spans_along(bvh.scene(), trace.volumes(), &ray, 0.5, hit_t, &mut along);
                 prop_assert_eq!(&spans[..], &along[..]);
+            }
+            // The unseen hold every surface that a ray between the
+            // sub-rays meets nearer than the farthest closest hit, and
+            // none that a sub-ray hits.
+            let hit: Vec<u32> = (0..dirs.len()).filter_map(|i| trace.hit(i).map(|h| h.prim)).collect();
+            prop_assert!(trace.unseen().iter().all(|p| !hit.contains(p)));
+            prop_assert!(trace.unseen().windows(2).all(|w| w[0] < w[1]));
+            let far = if hit.len() == dirs.len() {
+                (0..dirs.len()).map(|i| trace.range(i)).fold(0.0, f64::max)
+            } else {
+                1e4
+            };
+            for d in between(&dirs, seed) {
+                let ray = Ray { origin, dir: d };
+                for (p, prim) in bvh.scene().primitives.iter().enumerate() {
+                    let p = p as u32;
+                    if prim.intersect(&ray, 0.5, far).is_some() && !hit.contains(&p) {
+                        prop_assert!(trace.unseen().contains(&p), "primitive {} between the sub-rays", p);
+                    }
+                }
             }
         }
     }

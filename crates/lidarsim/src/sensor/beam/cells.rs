@@ -1,0 +1,550 @@
+//! The cells of a sub-ray pattern and the outlines of targets, in the
+//! pattern's plane: a direction `(X, s·Y, 1)` of the undeflected beam is the
+//! point `(X, Y)`, `s` the elliptical stretch, so that the round beam's
+//! geometry serves both shapes (beam.rs).
+//!
+//! A sub-ray's cell is its Voronoi cell — the points nearer to it than to
+//! any other sub-ray — within the disk that holds 99.99 % of the beam's
+//! energy: the cells tile the beam, so that a target anywhere in it lies in
+//! some cell. A refined cell is sampled by a `k × k` jittered grid mapped
+//! onto it area for area (a fan of triangles from the sub-ray; the first
+//! coordinate picks the triangle and the place along its outer edge by
+//! area, the square root of the second the distance out from the sub-ray).
+//!
+//! Which cells a target covers: the target's outline is the convex hull of
+//! the points it projects to, and a cell meets it unless an edge of one of
+//! the two convex polygons separates them (the separating-axis theorem).
+
+/// Corners of the polygon that the cells of the outer ring are clipped
+/// to: a regular polygon around the disk of [`Cell::reach`] (its sides
+/// touch the disk).
+pub(super) const RIM_CORNERS: usize = 32;
+
+/// A point of the pattern's plane.
+pub type PlanePoint = [f64; 2];
+
+/// One sub-ray's cell: a convex polygon around it.
+#[derive(Clone, Debug, PartialEq)]
+pub(super) struct Cell {
+    /// The sub-ray, inside the polygon.
+    site: PlanePoint,
+    /// Corners, counter-clockwise.
+    corners: Vec<PlanePoint>,
+    /// Cumulative areas of the triangles (site, corner k, corner k + 1).
+    fan: Vec<f64>,
+    /// Largest distance of a corner from the site.
+    radius: f64,
+}
+
+fn sub(a: PlanePoint, b: PlanePoint) -> PlanePoint {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+fn cross(a: PlanePoint, b: PlanePoint) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+fn dot(a: PlanePoint, b: PlanePoint) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+
+fn dist(a: PlanePoint, b: PlanePoint) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
+/// The part of the convex polygon `poly` where `dot(x, n) ≤ c`
+/// (Sutherland & Hodgman 1974, one plane), into `out`.
+fn clip(poly: &[PlanePoint], n: PlanePoint, c: f64, out: &mut Vec<PlanePoint>) {
+    out.clear();
+    for (k, &a) in poly.iter().enumerate() {
+        let b = poly[(k + 1) % poly.len()];
+        let (da, db) = (dot(a, n) - c, dot(b, n) - c);
+        if da <= 0.0 {
+            out.push(a);
+        }
+        if (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0) {
+            let f = da / (da - db);
+            out.push([a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]);
+        }
+    }
+}
+
+impl Cell {
+    /// The Voronoi cell of `sites[i]` within the rim polygon around the
+    /// disk of radius `reach`; `near` lists the other sites by increasing
+    /// distance (distance, index).
+    pub(super) fn voronoi(
+        sites: &[PlanePoint],
+        i: usize,
+        near: &[(f64, usize)],
+        reach: f64,
+    ) -> Self {
+        let site = sites[i];
+        let step = std::f64::consts::TAU / RIM_CORNERS as f64;
+        let rim = reach / (step / 2.0).cos();
+        let mut corners: Vec<PlanePoint> = (0..RIM_CORNERS)
+            .map(|k| {
+                let (s, c) = (k as f64 * step).sin_cos();
+                [rim * c, rim * s]
+            })
+            .collect();
+        let mut work = Vec::with_capacity(RIM_CORNERS + 8);
+        for &(d, j) in near {
+            // A site farther than twice the farthest corner cannot cut.
+            let farthest = corners.iter().map(|&c| dist(c, site)).fold(0.0, f64::max);
+            if d > 2.0 * farthest {
+                break;
+            }
+            // Nearer to the site than to sites[j]: (x − mid)·(pⱼ − site) ≤ 0.
+            let n = sub(sites[j], site);
+            let mid = [(site[0] + sites[j][0]) / 2.0, (site[1] + sites[j][1]) / 2.0];
+            clip(&corners, n, dot(mid, n), &mut work);
+            std::mem::swap(&mut corners, &mut work);
+        }
+        let mut fan = Vec::with_capacity(corners.len());
+        let mut total = 0.0;
+        for (k, &a) in corners.iter().enumerate() {
+            let b = corners[(k + 1) % corners.len()];
+            total += 0.5 * cross(sub(a, site), sub(b, site)).max(0.0);
+            fan.push(total);
+        }
+        let radius = corners.iter().map(|&c| dist(c, site)).fold(0.0, f64::max);
+        Self {
+            site,
+            corners,
+            fan,
+            radius,
+        }
+    }
+
+    /// Area of the cell.
+    pub(super) fn area(&self) -> f64 {
+        self.fan.last().copied().unwrap_or(0.0)
+    }
+
+    /// The sub-ray, and the largest distance of a point of the cell from
+    /// it.
+    pub(super) fn disk(&self) -> (PlanePoint, f64) {
+        (self.site, self.radius)
+    }
+
+    /// The point of the cell that `(a, b)` of the unit square maps to, area
+    /// for area: `a` picks the triangle of the fan and the place along its
+    /// outer edge, `√b` the distance from the site towards that place (a
+    /// triangle's area out to a fraction `f` of its height grows as `f²`).
+    pub(super) fn sample(&self, a: f64, b: f64) -> PlanePoint {
+        let s = a * self.area();
+        let k = self
+            .fan
+            .iter()
+            .position(|&c| c > s)
+            .unwrap_or(self.fan.len() - 1);
+        let before = if k == 0 { 0.0 } else { self.fan[k - 1] };
+        let width = self.fan[k] - before;
+        let t = if width > 0.0 {
+            ((s - before) / width).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let (p, q) = (self.corners[k], self.corners[(k + 1) % self.corners.len()]);
+        let edge = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
+        let f = b.sqrt();
+        [
+            self.site[0] + f * (edge[0] - self.site[0]),
+            self.site[1] + f * (edge[1] - self.site[1]),
+        ]
+    }
+
+    /// Whether `p` lies in the cell (its edges included, within `tol`).
+    #[cfg(test)]
+    pub(super) fn contains(&self, p: PlanePoint, tol: f64) -> bool {
+        self.corners.iter().enumerate().all(|(k, &a)| {
+            let b = self.corners[(k + 1) % self.corners.len()];
+            let e = sub(b, a);
+            cross(e, sub(p, a)) >= -tol * e[0].hypot(e[1])
+        })
+    }
+
+    /// Whether the cell meets the convex `outline`.
+    pub(super) fn meets(&self, outline: &Outline) -> bool {
+        let Some((lo, hi)) = outline.bounds() else {
+            return false;
+        };
+        // The disk around the site that holds the cell, against the
+        // outline's box.
+        let dx = (lo[0] - self.site[0]).max(self.site[0] - hi[0]).max(0.0);
+        let dy = (lo[1] - self.site[1]).max(self.site[1] - hi[1]).max(0.0);
+        if dx.hypot(dy) > self.radius {
+            return false;
+        }
+        !(separates(&self.corners, &self.corners, &outline.hull)
+            || separates(&outline.hull, &self.corners, &outline.hull))
+    }
+}
+
+/// Whether an edge of the convex polygon `edges` separates the convex
+/// polygons `a` and `b` (their projections on its normal are apart).
+/// A polygon of one or two points is a point or a segment: a segment's
+/// two edges are one line, its normal the axis.
+fn separates(edges: &[PlanePoint], a: &[PlanePoint], b: &[PlanePoint]) -> bool {
+    let range = |poly: &[PlanePoint], n: PlanePoint| {
+        poly.iter()
+            .map(|&p| dot(p, n))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+                (lo.min(x), hi.max(x))
+            })
+    };
+    edges.iter().enumerate().any(|(k, &p)| {
+        let q = edges[(k + 1) % edges.len()];
+        let n = [p[1] - q[1], q[0] - p[0]];
+        if n == [0.0, 0.0] {
+            return false;
+        }
+        let (alo, ahi) = range(a, n);
+        let (blo, bhi) = range(b, n);
+        // A margin of rounding: touching is meeting.
+        let tol = 1e-12 * (alo.abs().max(ahi.abs()) + blo.abs().max(bhi.abs()));
+        ahi < blo - tol || bhi < alo - tol
+    })
+}
+
+/// The convex outline of a target in a pattern's plane: the hull of the
+/// points given ([`Outline::push`]), made by
+/// [`super::BeamPattern::close_outline`]. It keeps its storage between
+/// targets.
+#[derive(Clone, Debug, Default)]
+pub struct Outline {
+    /// Corners, counter-clockwise (one or two for a point or a segment).
+    hull: Vec<PlanePoint>,
+    /// The points given, then working storage.
+    points: Vec<PlanePoint>,
+}
+
+impl Outline {
+    /// Forgets the points.
+    pub fn clear(&mut self) {
+        self.hull.clear();
+        self.points.clear();
+    }
+
+    /// Adds a point of the target.
+    pub fn push(&mut self, p: PlanePoint) {
+        self.points.push(p);
+    }
+
+    /// The convex hull of the points given, clipped to the square
+    /// `|X|, |Y| ≤ half_side` (Andrew's monotone chain, 1979).
+    pub(super) fn close(&mut self, half_side: f64) {
+        self.hull_of_points();
+        self.clip_to_square(half_side);
+    }
+
+    /// The convex hull of the points given, into `hull`.
+    fn hull_of_points(&mut self) {
+        let pts = &mut self.points;
+        pts.sort_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+        pts.dedup();
+        let hull = &mut self.hull;
+        hull.clear();
+        if pts.len() < 3 {
+            hull.extend_from_slice(pts);
+        } else {
+            // The lower chain left to right, then the upper one back.
+            let turns_left =
+                |h: &[PlanePoint], p: PlanePoint| cross(sub(h[1], h[0]), sub(p, h[0])) > 0.0;
+            for &p in pts.iter() {
+                while hull.len() >= 2 && !turns_left(&hull[hull.len() - 2..], p) {
+                    hull.pop();
+                }
+                hull.push(p);
+            }
+            let lower = hull.len() + 1;
+            for &p in pts.iter().rev().skip(1) {
+                while hull.len() >= lower && !turns_left(&hull[hull.len() - 2..], p) {
+                    hull.pop();
+                }
+                hull.push(p);
+            }
+            hull.pop();
+        }
+    }
+
+    /// The hull clipped to the square `|X|, |Y| ≤ half_side`.
+    fn clip_to_square(&mut self, half_side: f64) {
+        let (hull, pts) = (&mut self.hull, &mut self.points);
+        // Clipped to the square: the beam lies inside it, and far corners
+        // of a large surface would only cost precision.
+        if hull.len() >= 3 {
+            for (n, c) in [
+                ([1.0, 0.0], half_side),
+                ([-1.0, 0.0], half_side),
+                ([0.0, 1.0], half_side),
+                ([0.0, -1.0], half_side),
+            ] {
+                clip(hull, n, c, pts);
+                std::mem::swap(hull, pts);
+            }
+        } else if let [a, b] = hull[..] {
+            // A segment: its part within the square, or nothing.
+            hull.clear();
+            clip_segment(a, b, half_side, hull);
+        } else if let [a] = hull[..]
+            && (a[0].abs() > half_side || a[1].abs() > half_side)
+        {
+            hull.clear();
+        }
+    }
+
+    /// The corners of the outline.
+    pub fn corners(&self) -> &[PlanePoint] {
+        &self.hull
+    }
+
+    /// Makes this outline its part within the convex `cell`: the
+    /// intersection of two convex polygons, by clipping to each of the
+    /// cell's edges (empty when they share no area).
+    pub(super) fn clip_to_cell(&mut self, cell: &Cell) {
+        if self.hull.len() < 3 {
+            self.hull.clear();
+            return;
+        }
+        let c = &cell.corners;
+        for (k, &a) in c.iter().enumerate() {
+            let e = sub(c[(k + 1) % c.len()], a);
+            // Inside: left of the edge, cross(e, x − a) ≥ 0.
+            let n = [e[1], -e[0]];
+            clip(&self.hull, n, dot(a, n), &mut self.points);
+            std::mem::swap(&mut self.hull, &mut self.points);
+            if self.hull.len() < 3 {
+                self.hull.clear();
+                return;
+            }
+        }
+    }
+
+    /// Copies `other`'s corners, keeping this outline's storage.
+    pub fn copy_from(&mut self, other: &Outline) {
+        self.hull.clear();
+        self.hull.extend_from_slice(&other.hull);
+        self.points.clear();
+    }
+
+    /// Its area (0 for a point or a segment).
+    pub fn area(&self) -> f64 {
+        let h = &self.hull;
+        if h.len() < 3 {
+            return 0.0;
+        }
+        let o = h[0];
+        (1..h.len() - 1)
+            .map(|k| 0.5 * cross(sub(h[k], o), sub(h[k + 1], o)))
+            .sum()
+    }
+
+    /// The mean of its corners: a point inside it.
+    fn centre(&self) -> PlanePoint {
+        let n = self.hull.len() as f64;
+        let (x, y) = self
+            .hull
+            .iter()
+            .fold((0.0, 0.0), |(x, y), p| (x + p[0], y + p[1]));
+        [x / n, y / n]
+    }
+
+    /// Whether `p` lies inside it or on its edge (an outline without area
+    /// holds no point).
+    pub fn contains(&self, p: PlanePoint) -> bool {
+        let h = &self.hull;
+        h.len() >= 3
+            && h.iter().enumerate().all(|(k, &a)| {
+                let b = h[(k + 1) % h.len()];
+                cross(sub(b, a), sub(p, a)) >= 0.0
+            })
+    }
+
+    /// The point that `(a, b)` of the unit square maps to, area for area,
+    /// as [`Cell::sample`] maps it onto a cell: the fan of triangles from
+    /// the mean of the corners (inside the convex outline). Needs an area.
+    pub(super) fn sample(&self, a: f64, b: f64) -> PlanePoint {
+        let h = &self.hull;
+        let site = self.centre();
+        let tri = |k: usize| 0.5 * cross(sub(h[k], site), sub(h[(k + 1) % h.len()], site)).max(0.0);
+        let total: f64 = (0..h.len()).map(tri).sum();
+        let mut s = a * total;
+        let mut k = 0;
+        while k + 1 < h.len() && s >= tri(k) {
+            s -= tri(k);
+            k += 1;
+        }
+        let width = tri(k);
+        let t = if width > 0.0 {
+            (s / width).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let (p, q) = (h[k], h[(k + 1) % h.len()]);
+        let edge = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
+        let f = b.sqrt();
+        [
+            site[0] + f * (edge[0] - site[0]),
+            site[1] + f * (edge[1] - site[1]),
+        ]
+    }
+
+    /// Lower and upper corners of its box (`None`: empty).
+    fn bounds(&self) -> Option<(PlanePoint, PlanePoint)> {
+        let first = *self.hull.first()?;
+        Some(self.hull.iter().fold((first, first), |(lo, hi), p| {
+            (
+                [lo[0].min(p[0]), lo[1].min(p[1])],
+                [hi[0].max(p[0]), hi[1].max(p[1])],
+            )
+        }))
+    }
+
+    /// Its smallest width: over its edges, the largest distance of a
+    /// corner from the edge's line (a convex polygon's narrowest strip has
+    /// an edge on one side); 0 for a point or a segment.
+    pub fn width(&self) -> f64 {
+        let h = &self.hull;
+        if h.len() < 3 {
+            return 0.0;
+        }
+        (0..h.len())
+            .map(|k| {
+                let (a, b) = (h[k], h[(k + 1) % h.len()]);
+                let e = sub(b, a);
+                let len = e[0].hypot(e[1]);
+                if len == 0.0 {
+                    return f64::INFINITY;
+                }
+                h.iter()
+                    .map(|&p| cross(e, sub(p, a)).abs() / len)
+                    .fold(0.0, f64::max)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// The part of the segment `a`–`b` within the square `|X|, |Y| ≤ h`, its
+/// two ends pushed to `out` (nothing when it misses the square; Liang &
+/// Barsky 1984).
+fn clip_segment(a: PlanePoint, b: PlanePoint, h: f64, out: &mut Vec<PlanePoint>) {
+    let d = sub(b, a);
+    let (mut t0, mut t1) = (0.0f64, 1.0f64);
+    for (p, q) in [
+        (-d[0], a[0] + h),
+        (d[0], h - a[0]),
+        (-d[1], a[1] + h),
+        (d[1], h - a[1]),
+    ] {
+        if p == 0.0 {
+            if q < 0.0 {
+                return;
+            }
+        } else {
+            let r = q / p;
+            if p < 0.0 {
+                t0 = t0.max(r);
+            } else {
+                t1 = t1.min(r);
+            }
+        }
+    }
+    if t0 <= t1 {
+        out.push([a[0] + t0 * d[0], a[1] + t0 * d[1]]);
+        out.push([a[0] + t1 * d[0], a[1] + t1 * d[1]]);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn outline(points: &[PlanePoint]) -> Outline {
+        let mut o = Outline::default();
+        for &p in points {
+            o.push(p);
+        }
+        o.close(10.0);
+        o
+    }
+
+    #[test]
+    fn hulls_widths_and_clipping() {
+        // A square with a point inside: its four corners, width 2.
+        let o = outline(&[[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0], [1.0, 1.0]]);
+        assert_eq!(o.corners().len(), 4);
+        assert!((o.width() - 2.0).abs() < 1e-12);
+        // A thin strip at 45°: its width, not its box's.
+        let s = 0.01 / 2f64.sqrt();
+        let o = outline(&[[0.0, 0.0], [5.0, 5.0], [5.0 - s, 5.0 + s], [-s, s]]);
+        assert!((o.width() - 0.01).abs() < 1e-9, "{}", o.width());
+        // Clipped to the square: a huge triangle keeps its part inside.
+        let o = outline(&[[-100.0, -100.0], [100.0, -100.0], [0.0, 100.0]]);
+        let inside = |p: &PlanePoint| p[0].abs() <= 10.0 + 1e-9 && p[1].abs() <= 10.0 + 1e-9;
+        assert!(o.corners().iter().all(inside), "{:?}", o.corners());
+        assert!(o.width() > 19.0);
+        // A segment crossing the square keeps its part inside it.
+        let o = outline(&[[-20.0, 0.0], [20.0, 0.0]]);
+        assert_eq!(o.corners(), &[[-10.0, 0.0], [10.0, 0.0]]);
+        assert_eq!(o.width(), 0.0);
+        let o = outline(&[[20.0, 20.0], [30.0, 0.0]]);
+        assert!(o.corners().is_empty());
+    }
+
+    /// A cell meets an outline exactly when some point lies in both:
+    /// against a fine grid of points, over random cells and outlines.
+    #[test]
+    fn cells_meet_outlines_that_share_a_point() {
+        let mut rng = crate::rng::Stream::new(8, 0, 0, crate::rng::Purpose::Test);
+        let sites: Vec<PlanePoint> = (0..12)
+            .map(|_| [rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0])
+            .collect();
+        let cells: Vec<Cell> = (0..sites.len())
+            .map(|i| {
+                let mut near: Vec<(f64, usize)> = (0..sites.len())
+                    .filter(|&j| j != i)
+                    .map(|j| (dist(sites[i], sites[j]), j))
+                    .collect();
+                near.sort_by(|a, b| a.0.total_cmp(&b.0));
+                Cell::voronoi(&sites, i, &near, 1.5)
+            })
+            .collect();
+        let (mut met, mut apart) = (0, 0);
+        for _ in 0..300 {
+            let c = [rng.uniform() * 3.0 - 1.5, rng.uniform() * 3.0 - 1.5];
+            let size = rng.uniform() * 0.3;
+            let pts: Vec<PlanePoint> = (0..3)
+                .map(|_| {
+                    [
+                        c[0] + size * (rng.uniform() - 0.5),
+                        c[1] + size * (rng.uniform() - 0.5),
+                    ]
+                })
+                .collect();
+            let o = outline(&pts);
+            for cell in &cells {
+                // Points of the triangle, on a fine barycentric grid.
+                let n = 40;
+                let shared = (0..=n).any(|u| {
+                    (0..=n - u).any(|v| {
+                        let (a, b) = (u as f64 / n as f64, v as f64 / n as f64);
+                        let p = [
+                            pts[0][0] + a * (pts[1][0] - pts[0][0]) + b * (pts[2][0] - pts[0][0]),
+                            pts[0][1] + a * (pts[1][1] - pts[0][1]) + b * (pts[2][1] - pts[0][1]),
+                        ];
+                        cell.contains(p, 0.0)
+                    })
+                });
+                if shared {
+                    assert!(cell.meets(&o), "{pts:?}");
+                    met += 1;
+                } else if !cell.meets(&o) {
+                    apart += 1;
+                }
+            }
+        }
+        assert!(met > 100 && apart > 1000, "{met} {apart}");
+    }
+}
