@@ -484,6 +484,13 @@ impl BeamPattern {
         outline.close(self.reach);
     }
 
+    /// Whether the convex `outline` holds the whole of cell `i` (a cheap
+    /// test: `false` may still hold it).
+    pub fn outline_holds_cell(&self, i: usize, outline: &Outline) -> bool {
+        let (site, radius) = self.cells[i].disk();
+        outline.holds_disk(site, radius)
+    }
+
     /// Whether cell `i` meets the convex `outline`.
     pub fn cell_meets(&self, i: usize, outline: &Outline) -> bool {
         self.cells[i].meets(outline)

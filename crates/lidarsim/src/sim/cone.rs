@@ -119,6 +119,10 @@ impl ConeScratch {
     /// A patch of cell `cell`: `outline`'s part in it, kept when that part
     /// has an area and, for `whole_too` false, does not fill the cell.
     fn add_patch(&mut self, pattern: &BeamPattern, cell: usize, whole_too: bool) {
+        // An outline that holds the whole cell fills it, without clipping.
+        if !whole_too && pattern.outline_holds_cell(cell, &self.outline) {
+            return;
+        }
         if self.used == self.patches.len() {
             self.patches.push(Patch::default());
         }

@@ -34,6 +34,39 @@ pub(super) struct Cell {
     fan: Vec<f64>,
     /// Largest distance of a corner from the site.
     radius: f64,
+    /// Its edges' half-planes, corner by corner: see [`Edge`].
+    edges: Vec<Edge>,
+}
+
+/// One edge of a cell, from corner `k` to corner `k + 1`, as the tests
+/// against outlines use it, computed once: the outward normal `out` with
+/// the cell where `x · out ≤ c`, and the inward normal `inward` (the
+/// separating-axis test's) with the cell's extent `[lo, hi]` along it.
+#[derive(Clone, Debug, PartialEq)]
+struct Edge {
+    out: PlanePoint,
+    c: f64,
+    inward: PlanePoint,
+    lo: f64,
+    hi: f64,
+}
+
+impl Edge {
+    /// The edge from `corners[k]` to the next corner.
+    fn of(corners: &[PlanePoint], k: usize) -> Self {
+        let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
+        let e = sub(b, a);
+        let out = [e[1], -e[0]];
+        let inward = [a[1] - b[1], b[0] - a[0]];
+        let (lo, hi) = range(corners, inward);
+        Self {
+            out,
+            c: dot(a, out),
+            inward,
+            lo,
+            hi,
+        }
+    }
 }
 
 fn sub(a: PlanePoint, b: PlanePoint) -> PlanePoint {
@@ -109,11 +142,13 @@ impl Cell {
             fan.push(total);
         }
         let radius = corners.iter().map(|&c| dist(c, site)).fold(0.0, f64::max);
+        let edges = (0..corners.len()).map(|k| Edge::of(&corners, k)).collect();
         Self {
             site,
             corners,
             fan,
             radius,
+            edges,
         }
     }
 
@@ -177,9 +212,37 @@ impl Cell {
         if dx.hypot(dy) > self.radius {
             return false;
         }
-        !(separates(&self.corners, &self.corners, &outline.hull)
+        !(self.edge_separates(&outline.hull)
             || separates(&outline.hull, &self.corners, &outline.hull))
     }
+
+    /// Whether an edge of the cell separates it from the convex polygon
+    /// `b`: [`separates`] over the cell's own edges, with the cell's
+    /// extent along each taken from [`Edge`].
+    fn edge_separates(&self, b: &[PlanePoint]) -> bool {
+        self.edges.iter().any(|e| {
+            if e.inward == [0.0, 0.0] {
+                return false;
+            }
+            apart((e.lo, e.hi), range(b, e.inward))
+        })
+    }
+}
+
+/// Lower and upper bounds of `p · n` over the points `p` of `poly`.
+fn range(poly: &[PlanePoint], n: PlanePoint) -> (f64, f64) {
+    poly.iter()
+        .map(|&p| dot(p, n))
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        })
+}
+
+/// Whether the ranges `(alo, ahi)` and `(blo, bhi)` of two polygons along
+/// an axis are apart, with a margin of rounding: touching is meeting.
+fn apart((alo, ahi): (f64, f64), (blo, bhi): (f64, f64)) -> bool {
+    let tol = 1e-12 * (alo.abs().max(ahi.abs()) + blo.abs().max(bhi.abs()));
+    ahi < blo - tol || bhi < alo - tol
 }
 
 /// Whether an edge of the convex polygon `edges` separates the convex
@@ -187,24 +250,13 @@ impl Cell {
 /// A polygon of one or two points is a point or a segment: a segment's
 /// two edges are one line, its normal the axis.
 fn separates(edges: &[PlanePoint], a: &[PlanePoint], b: &[PlanePoint]) -> bool {
-    let range = |poly: &[PlanePoint], n: PlanePoint| {
-        poly.iter()
-            .map(|&p| dot(p, n))
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
-                (lo.min(x), hi.max(x))
-            })
-    };
     edges.iter().enumerate().any(|(k, &p)| {
         let q = edges[(k + 1) % edges.len()];
         let n = [p[1] - q[1], q[0] - p[0]];
         if n == [0.0, 0.0] {
             return false;
         }
-        let (alo, ahi) = range(a, n);
-        let (blo, bhi) = range(b, n);
-        // A margin of rounding: touching is meeting.
-        let tol = 1e-12 * (alo.abs().max(ahi.abs()) + blo.abs().max(bhi.abs()));
-        ahi < blo - tol || bhi < alo - tol
+        apart(range(a, n), range(b, n))
     })
 }
 
@@ -308,18 +360,31 @@ impl Outline {
             self.hull.clear();
             return;
         }
-        let c = &cell.corners;
-        for (k, &a) in c.iter().enumerate() {
-            let e = sub(c[(k + 1) % c.len()], a);
-            // Inside: left of the edge, cross(e, x − a) ≥ 0.
-            let n = [e[1], -e[0]];
-            clip(&self.hull, n, dot(a, n), &mut self.points);
+        for e in &cell.edges {
+            // Inside: left of the edge, cross(e, x − a) ≥ 0. An edge with
+            // the whole outline inside leaves it as it is.
+            if self.hull.iter().all(|&p| dot(p, e.out) <= e.c) {
+                continue;
+            }
+            clip(&self.hull, e.out, e.c, &mut self.points);
             std::mem::swap(&mut self.hull, &mut self.points);
             if self.hull.len() < 3 {
                 self.hull.clear();
                 return;
             }
         }
+    }
+
+    /// Whether the outline holds the whole disk of radius `r` around `c`
+    /// (every edge's line at least `r` from `c`, on its inner side, with a
+    /// margin for rounding): a cell inside that disk is inside the outline.
+    pub(super) fn holds_disk(&self, c: PlanePoint, r: f64) -> bool {
+        let h = &self.hull;
+        h.len() >= 3
+            && h.iter().enumerate().all(|(k, &a)| {
+                let e = sub(h[(k + 1) % h.len()], a);
+                cross(e, sub(c, a)) >= r * (1.0 + 1e-9) * e[0].hypot(e[1])
+            })
     }
 
     /// Copies `other`'s corners, keeping this outline's storage.
