@@ -25,7 +25,7 @@
 //! change that moves the physics (the lazy refinement of
 //! `scripts/referee/lazy_refinement.patch`).
 
-use lidarsim::Survey;
+use crate::kit::SurveyText;
 use lidarsim::output::{Component, PointRecord};
 use lidarsim::sim::simulate_world_to_memory;
 use lidarsim::world::World;
@@ -63,39 +63,18 @@ const T_CRITICAL: f64 = 5.465;
 /// Points of the test stand flown with `march` and survey seed `seed`
 /// (steps of 0.1 m: see the module documentation).
 fn fly(march: &str, seed: u64) -> Vec<PointRecord> {
-    let text = format!(
-        r#"
-seed = {seed}
-[scanner]
-prf_hz = 50000
-scan_frequency_hz = 100
-scan_angle_deg = 4.0
-divergence_mrad = 0.5
-subrays = 19
-max_returns = 5
-[vegetation]
-march = "{march}"
-step_m = 0.1
-[[flight_line]]
-start_m = [0.0, -30.0, 500.0]
-end_m = [0.0, 30.0, 500.0]
-speed_mps = 50.0
-[materials.grass]
-reflectance = 0.3
-[[polygon]]
-material = "grass"
-class = "ground"
-vertices_m = [[-100, -100, 0], [100, -100, 0], [100, 100, 0], [-100, 100, 0]]
-[[forest]]
-rectangle_m = [-60.0, -60.0, 60.0, 60.0]
-stems_per_ha = 600
-species = {{ pine = 0.5, spruce = 0.3, birch = 0.2 }}
-height_m = [12.0, 26.0]
-min_spacing_m = 2.0
-seed = 3
-"#
-    );
-    let s = Survey::from_toml(&text, None).unwrap_or_else(|e| panic!("{e}"));
+    let s = SurveyText::new(seed)
+        .scanner(50_000.0, 4.0, 19)
+        .raw("scan_frequency_hz = 100\ndivergence_mrad = 0.5\nmax_returns = 5")
+        .raw(&format!("[vegetation]\nmarch = \"{march}\"\nstep_m = 0.1"))
+        .line([0.0, -30.0, 500.0], [0.0, 30.0, 500.0], 50.0)
+        .ground("grass", 0.3, 100.0)
+        .raw(
+            "[[forest]]\nrectangle_m = [-60.0, -60.0, 60.0, 60.0]\nstems_per_ha = 600\n\
+             species = { pine = 0.5, spruce = 0.3, birch = 0.2 }\nheight_m = [12.0, 26.0]\n\
+             min_spacing_m = 2.0\nseed = 3",
+        )
+        .survey();
     let w = World::build(&s).unwrap_or_else(|e| panic!("{e}"));
     simulate_world_to_memory(&s, &w, 2)
 }
