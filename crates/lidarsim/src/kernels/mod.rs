@@ -7,7 +7,9 @@
 //! inputs). The workspace builds for x86-64-v3 (`.cargo/config.toml`),
 //! where the AVX/AVX2 forms run; a build without those features
 //! (`-C target-cpu=x86-64`, another architecture) runs the scalar twins,
-//! and the test command runs the whole test suite on that build too.
+//! and the test command flies the demo on that build and compares its
+//! files with the x86-64-v3 build's, byte for byte
+//! (`scripts/check_portable.sh`).
 //!
 //! The kernels:
 //! - [`direction_bounds`]: per axis the bounds and the sum of a pulse's
