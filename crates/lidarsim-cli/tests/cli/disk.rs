@@ -12,7 +12,7 @@
 use std::path::Path;
 use std::process::{Command, Output};
 
-use crate::kit::temp;
+use crate::kit::{Limit, limited_by, temp};
 
 const SURVEY: &str = r#"[scanner]
 prf_hz = 20000
@@ -68,30 +68,6 @@ fn output_directory_that_cannot_be_created() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Runs the survey with every file limited to `limit` bytes.
-#[cfg(target_os = "linux")]
-fn run_limited(survey: &Path, out: &Path, limit: u64) -> Output {
-    use std::os::unix::process::CommandExt;
-    let mut c = Command::new(env!("CARGO_BIN_EXE_lidarsim"));
-    c.arg("run").arg(survey).arg("-o").arg(out);
-    // SAFETY: between fork and exec, only async-signal-safe calls
-    // (setrlimit, signal) on plain values.
-    unsafe {
-        c.pre_exec(move || {
-            let lim = libc::rlimit {
-                rlim_cur: limit,
-                rlim_max: limit,
-            };
-            if libc::setrlimit(libc::RLIMIT_FSIZE, &lim) != 0 {
-                return Err(std::io::Error::last_os_error());
-            }
-            libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
-            Ok(())
-        });
-    }
-    c.output().unwrap()
-}
-
 #[cfg(target_os = "linux")]
 #[test]
 fn full_disk_names_the_file_and_leaves_nothing_finished() {
@@ -109,7 +85,13 @@ fn full_disk_names_the_file_and_leaves_nothing_finished() {
         let out = dir.join("out");
         // 16 000 pulses: 800 kB of LAS, 1.6 MB of text; the trajectories
         // take 60 kB each.
-        let o = run_limited(&survey, &out, 200_000);
+        let args = [
+            "run".as_ref(),
+            survey.as_os_str(),
+            "-o".as_ref(),
+            out.as_os_str(),
+        ];
+        let o = limited_by(&args, Limit::FileSize(200_000));
         let stderr = String::from_utf8_lossy(&o.stderr);
         println!("{file} on a full disk: {}", stderr.trim());
         assert_eq!(o.status.code(), Some(1), "{stderr}");

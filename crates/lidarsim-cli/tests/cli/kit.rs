@@ -75,29 +75,55 @@ pub const ADDRESS_SPACE: u64 = 4 << 30;
 /// Time allowed to a command run by [`limited`].
 pub const TIMEOUT: Duration = Duration::from_secs(120);
 
+/// A resource limit of a command run by [`limited_by`].
+#[derive(Clone, Copy, Debug)]
+pub enum Limit {
+    /// Address space, bytes (`RLIMIT_AS`): a huge allocation fails
+    /// instead of swapping the machine.
+    AddressSpace(u64),
+    /// Size of any file written, bytes (`RLIMIT_FSIZE`, with `SIGXFSZ`
+    /// ignored so that a write past it fails): a full disk.
+    FileSize(u64),
+}
+
 /// Runs `lidarsim ARGS` under [`ADDRESS_SPACE`] and [`TIMEOUT`], so that a
 /// regression that allocates without bound or never ends fails the test
 /// instead of exhausting the machine or hanging CI.
 pub fn limited(args: &[&OsStr]) -> Output {
+    limited_by(args, Limit::AddressSpace(ADDRESS_SPACE))
+}
+
+/// Runs `lidarsim ARGS` under `limit` (on Linux) and [`TIMEOUT`].
+pub fn limited_by(args: &[&OsStr], limit: Limit) -> Output {
     let mut c = bin();
     c.args(args).stdout(Stdio::piped()).stderr(Stdio::piped());
     #[cfg(target_os = "linux")]
     {
         use std::os::unix::process::CommandExt;
-        // SAFETY: only setrlimit, async-signal-safe, between fork and exec.
+        let (resource, bytes) = match limit {
+            Limit::AddressSpace(b) => (libc::RLIMIT_AS, b),
+            Limit::FileSize(b) => (libc::RLIMIT_FSIZE, b),
+        };
+        // SAFETY: between fork and exec, only async-signal-safe calls
+        // (setrlimit, signal) on plain values.
         unsafe {
-            c.pre_exec(|| {
+            c.pre_exec(move || {
                 let lim = libc::rlimit {
-                    rlim_cur: ADDRESS_SPACE,
-                    rlim_max: ADDRESS_SPACE,
+                    rlim_cur: bytes,
+                    rlim_max: bytes,
                 };
-                if libc::setrlimit(libc::RLIMIT_AS, &lim) != 0 {
+                if libc::setrlimit(resource, &lim) != 0 {
                     return Err(std::io::Error::last_os_error());
+                }
+                if matches!(limit, Limit::FileSize(_)) {
+                    libc::signal(libc::SIGXFSZ, libc::SIG_IGN);
                 }
                 Ok(())
             });
         }
     }
+    #[cfg(not(target_os = "linux"))]
+    let _ = limit;
     let mut child = c.spawn().unwrap();
     let start = Instant::now();
     loop {

@@ -3,9 +3,8 @@
 //! point clouds named as such.
 
 use std::path::Path;
-use std::process::{Command, Output};
 
-use crate::kit::{GOOD, bin, run_survey, temp, write_las};
+use crate::kit::{GOOD, Limit, bin, limited_by, run_survey, temp, write_las};
 
 #[test]
 fn render_writes_top_views_and_profiles_and_rejects_bad_options() {
@@ -133,33 +132,6 @@ fn render_reads_laz_and_point_format_9() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// Runs the binary under an address-space limit of `limit_kib` KiB (so
-/// that an attempt at a huge allocation fails instead of swapping the
-/// machine) and kills it if it has not finished after two minutes, far
-/// longer than any case here needs: a regression fails rather than hangs.
-fn run_limited(args: &[&std::ffi::OsStr], limit_kib: u64) -> Output {
-    use std::process::Stdio;
-    let child = Command::new("sh")
-        .arg("-c")
-        .arg(format!("ulimit -v {limit_kib} && exec \"$0\" \"$@\""))
-        .arg(env!("CARGO_BIN_EXE_lidarsim"))
-        .args(args)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let pid = child.id();
-    let (tx, rx) = std::sync::mpsc::channel();
-    std::thread::spawn(move || tx.send(child.wait_with_output()));
-    match rx.recv_timeout(std::time::Duration::from_secs(120)) {
-        Ok(o) => o.unwrap(),
-        Err(_) => {
-            let _ = Command::new("kill").arg("-9").arg(pid.to_string()).status();
-            panic!("lidarsim {args:?} did not finish within two minutes");
-        }
-    }
-}
-
 /// Width and height of a PNG, from its IHDR chunk.
 fn png_size(path: &Path) -> (u32, u32) {
     let b = std::fs::read(path).unwrap();
@@ -188,13 +160,12 @@ fn render_bounds_the_picture_size_instead_of_allocating_without_limit() {
         .collect();
     write_las(&small, &pts);
     let png = dir.join("x.png");
-    let gib2 = 2 * 1024 * 1024;
     let run = |cloud: &Path, extra: &[&str]| {
         let _ = std::fs::remove_file(&png);
         let mut args: Vec<&std::ffi::OsStr> = vec!["render".as_ref(), cloud.as_os_str()];
         args.extend(["-o".as_ref(), png.as_os_str()]);
         args.extend(extra.iter().map(std::ffi::OsStr::new));
-        run_limited(&args, gib2)
+        limited_by(&args, Limit::AddressSpace(2 << 30))
     };
     // Refused: the smallest pixel that fits 400 × 300 m in 16 M pixels is
     // √(400 · 300 / 16e6) = 0.0866 m; for 4000 km × 3000 km it is 866 m.
