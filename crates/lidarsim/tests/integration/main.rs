@@ -7,6 +7,7 @@ mod kit;
 mod canopy_marches;
 mod channels;
 mod deflectors;
+mod erf;
 mod fuzz;
 mod gltf;
 mod las_format;

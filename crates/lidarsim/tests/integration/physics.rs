@@ -3,6 +3,7 @@
 //! Lambert's law, the inverse-square law, echo separation, and
 //! thread-count independence.
 
+use crate::erf::erf;
 use lidarsim::Survey;
 use lidarsim::output::PointRecord;
 use lidarsim::sim::simulate_to_memory;
@@ -447,21 +448,6 @@ fn a_small_target_falls_as_r_to_the_fourth_and_a_plane_as_r_squared() {
     println!("amplitude ∝ R^-n: plate n = {plate:.2}, plane n = {plane:.2}");
     assert!((3.5..=4.5).contains(&plate), "plate {plate}");
     assert!((1.8..=2.2).contains(&plane), "plane {plane}");
-}
-
-/// The error function, to 1.2 × 10⁻⁷ (Numerical Recipes, `erfcc`).
-fn erf(x: f64) -> f64 {
-    let t = 1.0 / (1.0 + 0.5 * x.abs());
-    let poly = -1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let erfc = t * (-x * x + poly).exp();
-    if x >= 0.0 { 1.0 - erfc } else { erfc - 1.0 }
 }
 
 /// Half the side of the small plate, m, its reflectance, and the beam's

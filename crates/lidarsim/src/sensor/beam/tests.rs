@@ -1,5 +1,8 @@
 //! Tests of the sub-ray patterns, their cells and their samples.
 use super::*;
+#[path = "../../../tests/integration/erf.rs"]
+mod erf;
+use erf::erf;
 
 /// Enclosed power of the Gaussian beam within off-axis angle `r`.
 fn enclosed(r: f64, w: f64) -> f64 {
@@ -308,21 +311,6 @@ fn patch_samples_carry_the_beam_energy_over_the_target() {
     let se = sd / (ratios.len() as f64).sqrt();
     assert!((mean - 1.0).abs() < 4.0 * se, "mean {mean} ± {se}");
     eprintln!("small targets: RMS error {rms}; all: mean {mean} ± {se}");
-}
-
-/// The error function, to 1.2 × 10⁻⁷ (Numerical Recipes, `erfcc`).
-fn erf(x: f64) -> f64 {
-    let t = 1.0 / (1.0 + 0.5 * x.abs());
-    let poly = -1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let erfc = t * (-x * x + poly).exp();
-    if x >= 0.0 { 1.0 - erfc } else { erfc - 1.0 }
 }
 
 #[test]
