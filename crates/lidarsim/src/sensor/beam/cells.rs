@@ -54,7 +54,7 @@ struct Edge {
 impl Edge {
     /// The edge from `corners[k]` to the next corner.
     fn of(corners: &[PlanePoint], k: usize) -> Self {
-        let (a, b) = (corners[k], corners[(k + 1) % corners.len()]);
+        let (a, b) = (corners[k], corners[next(k, corners.len())]);
         let e = sub(b, a);
         let out = [e[1], -e[0]];
         let inward = [a[1] - b[1], b[0] - a[0]];
@@ -81,6 +81,21 @@ fn dot(a: PlanePoint, b: PlanePoint) -> f64 {
     a[0] * b[0] + a[1] * b[1]
 }
 
+/// The index after corner `k` of a polygon of `n` corners, the last
+/// closing to the first (a comparison: cheaper than `%` in the hot loops).
+#[inline]
+fn next(k: usize, n: usize) -> usize {
+    if k + 1 == n { 0 } else { k + 1 }
+}
+
+/// The sides of the polygon `poly`, corner `k` to corner `k + 1` in order
+/// of `k`, the last closing to the first.
+#[inline]
+fn sides(poly: &[PlanePoint]) -> impl Iterator<Item = (PlanePoint, PlanePoint)> + '_ {
+    let closing = poly.last().copied().zip(poly.first().copied());
+    (poly.windows(2).map(|w| (w[0], w[1]))).chain(closing)
+}
+
 fn dist(a: PlanePoint, b: PlanePoint) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
@@ -89,8 +104,7 @@ fn dist(a: PlanePoint, b: PlanePoint) -> f64 {
 /// (Sutherland & Hodgman 1974, one plane), into `out`.
 fn clip(poly: &[PlanePoint], n: PlanePoint, c: f64, out: &mut Vec<PlanePoint>) {
     out.clear();
-    for (k, &a) in poly.iter().enumerate() {
-        let b = poly[(k + 1) % poly.len()];
+    for (a, b) in sides(poly) {
         let (da, db) = (dot(a, n) - c, dot(b, n) - c);
         if da <= 0.0 {
             out.push(a);
@@ -137,7 +151,7 @@ impl Cell {
         let mut fan = Vec::with_capacity(corners.len());
         let mut total = 0.0;
         for (k, &a) in corners.iter().enumerate() {
-            let b = corners[(k + 1) % corners.len()];
+            let b = corners[next(k, corners.len())];
             total += 0.5 * cross(sub(a, site), sub(b, site)).max(0.0);
             fan.push(total);
         }
@@ -181,7 +195,7 @@ impl Cell {
         } else {
             0.5
         };
-        let (p, q) = (self.corners[k], self.corners[(k + 1) % self.corners.len()]);
+        let (p, q) = (self.corners[k], self.corners[next(k, self.corners.len())]);
         let edge = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
         let f = b.sqrt();
         [
@@ -194,7 +208,7 @@ impl Cell {
     #[cfg(test)]
     pub(super) fn contains(&self, p: PlanePoint, tol: f64) -> bool {
         self.corners.iter().enumerate().all(|(k, &a)| {
-            let b = self.corners[(k + 1) % self.corners.len()];
+            let b = self.corners[next(k, self.corners.len())];
             let e = sub(b, a);
             cross(e, sub(p, a)) >= -tol * e[0].hypot(e[1])
         })
@@ -250,8 +264,7 @@ fn apart((alo, ahi): (f64, f64), (blo, bhi): (f64, f64)) -> bool {
 /// A polygon of one or two points is a point or a segment: a segment's
 /// two edges are one line, its normal the axis.
 fn separates(edges: &[PlanePoint], a: &[PlanePoint], b: &[PlanePoint]) -> bool {
-    edges.iter().enumerate().any(|(k, &p)| {
-        let q = edges[(k + 1) % edges.len()];
+    sides(edges).any(|(p, q)| {
         let n = [p[1] - q[1], q[0] - p[0]];
         if n == [0.0, 0.0] {
             return false;
@@ -381,8 +394,8 @@ impl Outline {
     pub(super) fn holds_disk(&self, c: PlanePoint, r: f64) -> bool {
         let h = &self.hull;
         h.len() >= 3
-            && h.iter().enumerate().all(|(k, &a)| {
-                let e = sub(h[(k + 1) % h.len()], a);
+            && sides(h).all(|(a, b)| {
+                let e = sub(b, a);
                 cross(e, sub(c, a)) >= r * (1.0 + 1e-9) * e[0].hypot(e[1])
             })
     }
@@ -420,11 +433,7 @@ impl Outline {
     /// holds no point).
     pub fn contains(&self, p: PlanePoint) -> bool {
         let h = &self.hull;
-        h.len() >= 3
-            && h.iter().enumerate().all(|(k, &a)| {
-                let b = h[(k + 1) % h.len()];
-                cross(sub(b, a), sub(p, a)) >= 0.0
-            })
+        h.len() >= 3 && sides(h).all(|(a, b)| cross(sub(b, a), sub(p, a)) >= 0.0)
     }
 
     /// The point that `(a, b)` of the unit square maps to, area for area,
@@ -433,7 +442,7 @@ impl Outline {
     pub(super) fn sample(&self, a: f64, b: f64) -> PlanePoint {
         let h = &self.hull;
         let site = self.centre();
-        let tri = |k: usize| 0.5 * cross(sub(h[k], site), sub(h[(k + 1) % h.len()], site)).max(0.0);
+        let tri = |k: usize| 0.5 * cross(sub(h[k], site), sub(h[next(k, h.len())], site)).max(0.0);
         let total: f64 = (0..h.len()).map(tri).sum();
         let mut s = a * total;
         let mut k = 0;
@@ -447,7 +456,7 @@ impl Outline {
         } else {
             0.5
         };
-        let (p, q) = (h[k], h[(k + 1) % h.len()]);
+        let (p, q) = (h[k], h[next(k, h.len())]);
         let edge = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
         let f = b.sqrt();
         [
@@ -477,7 +486,7 @@ impl Outline {
         }
         (0..h.len())
             .map(|k| {
-                let (a, b) = (h[k], h[(k + 1) % h.len()]);
+                let (a, b) = (h[k], h[next(k, h.len())]);
                 let e = sub(b, a);
                 let len = e[0].hypot(e[1]);
                 if len == 0.0 {
