@@ -61,7 +61,7 @@ pub const VARIANTS: usize = 64;
 /// mapped onto it area for area.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Fineness {
-    /// 4 × 4 rays: what a resolved discontinuity asks for.
+    /// 4 × 4 rays: what a resolved discontinuity asks for by default.
     Rays16,
     /// 8 × 8 rays.
     Rays64,
@@ -72,6 +72,11 @@ pub enum Fineness {
 impl Fineness {
     /// Every fineness, coarsest first.
     pub const ALL: [Fineness; 3] = [Fineness::Rays16, Fineness::Rays64, Fineness::Rays256];
+
+    /// The fineness of `rays` rays (`None`: no such grid).
+    pub fn from_rays(rays: usize) -> Option<Self> {
+        Self::ALL.into_iter().find(|f| f.rays() == rays)
+    }
 
     /// Rays along each side of the grid.
     pub const fn side(self) -> usize {

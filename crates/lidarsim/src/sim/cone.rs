@@ -306,13 +306,13 @@ impl Simulator<'_> {
     /// returned share). The patches of `cone` are sampled on their own,
     /// smallest first, each without the samples in a smaller one; a cell
     /// marked in `marked` (across a discontinuity) is sampled at its
-    /// fineness and one whose sub-ray a patch covers at the coarsest,
-    /// without the samples in its patches; a patched cell's sub-ray
+    /// fineness and one whose sub-ray a patch covers at the fineness
+    /// `edge`, without the samples in its patches; a patched cell's sub-ray
     /// otherwise carries what its patches do not. Returns the share of
     /// each sub-ray whose cell is neither marked nor patched: what the
     /// others leave of the pulse's energy.
     pub(super) fn sample_cells(
-        pattern: &BeamPattern,
+        (pattern, edge): (&BeamPattern, Fineness),
         marked: &[Option<Fineness>],
         cone: &ConeScratch,
         fine: &mut Vec<(DVec3, f64)>,
@@ -355,7 +355,7 @@ impl Simulator<'_> {
             let in_any = |x| mine.iter().any(|p| p.shape.contains(x));
             let patched = fine.len();
             if fineness.is_some() || in_any(pattern.site(i)) {
-                let f = fineness.unwrap_or(Fineness::Rays16);
+                let f = fineness.unwrap_or(edge);
                 let kept = pattern.fine_samples_where(i, f, |x| !in_any(x), rest, fine);
                 if kept == 0 && in_patches > 0.0 {
                     // The patches cover every sample: they take the cell.

@@ -236,7 +236,8 @@ impl Simulator<'_> {
         if marked.is_empty() && !patched {
             return Sampling::Coarse;
         }
-        let share = Self::sample_cells(pattern, marked, cone, fine, counts);
+        let edge = self.survey.scanner.edge_fineness;
+        let share = Self::sample_cells((pattern, edge), marked, cone, fine, counts);
         fine_dirs.clear();
         fine_dirs.extend(fine.iter().map(|(d, _)| to_world * *d));
         self.caster
@@ -560,13 +561,14 @@ impl Simulator<'_> {
             a.is_finite() != b.is_finite()
                 || (a.is_finite() && (a - b).abs() > self.discontinuity_m)
         };
+        let edge = self.survey.scanner.edge_fineness;
         let mut any = false;
         for i in 0..n {
             let a = trace.range(i);
             for j in pattern.neighbours(i) {
                 if differ(a, trace.range(j)) {
-                    refine[i] = Some(Fineness::Rays16);
-                    refine[j] = Some(Fineness::Rays16);
+                    refine[i] = Some(edge);
+                    refine[j] = Some(edge);
                     any = true;
                 }
             }

@@ -32,6 +32,7 @@ use crate::detection::DetectorConfig;
 use crate::geometry::DVec3;
 pub use crate::message::num;
 use crate::scene::Material;
+use crate::sensor::beam::Fineness;
 use crate::sensor::channel::Channel;
 use crate::sensor::deflector::Deflector;
 use crate::sensor::navigation::NavigationErrors;
@@ -109,6 +110,9 @@ pub struct ScannerSettings {
     pub divergence_along_rad: f64,
     /// Sub-rays per pulse.
     pub subrays: usize,
+    /// How finely a sub-ray's cell is sampled across a discontinuity the
+    /// receiver resolves.
+    pub edge_fineness: Fineness,
     /// Closest range the receiver records, m.
     pub min_range_m: f64,
     /// Farthest range the receiver records, m.

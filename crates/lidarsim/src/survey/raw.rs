@@ -112,6 +112,9 @@ pub struct RawScanner {
     /// `divergence_mrad`, which is then the divergence across).
     pub divergence_along_mrad: Option<f64>,
     pub subrays: Option<i64>,
+    /// Rays sampling a cell across a resolved discontinuity: 16
+    /// (default), 64 or 256.
+    pub edge_rays: Option<i64>,
     pub pulse_fwhm_ns: Option<f64>,
     pub pulse_shape: Option<String>,
     pub max_returns: Option<i64>,

@@ -84,6 +84,21 @@ fn problems_name_line_and_key() {
 }
 
 #[test]
+fn edge_rays_name_a_grid_of_the_beam() {
+    use crate::sensor::beam::Fineness;
+    let with = |rays: &str| format!("[scanner]\nedge_rays = {rays}\n{MINIMAL}");
+    let fineness = |text: &str| Survey::from_toml(text, None).unwrap().scanner.edge_fineness;
+    assert_eq!(fineness(MINIMAL), Fineness::Rays16);
+    assert_eq!(fineness(&with("64")), Fineness::Rays64);
+    assert_eq!(fineness(&with("256")), Fineness::Rays256);
+    for wrong in ["4", "17", "0", "-16", "1024"] {
+        let d = diagnostics(&with(wrong));
+        assert_eq!((d[0].line, d[0].key.as_str()), (2, "scanner.edge_rays"));
+        assert!(d[0].message.contains("must be 16"), "{}", d[0].message);
+    }
+}
+
+#[test]
 fn unknown_keys_wrong_types_and_ranges_anywhere_are_reported_together() {
     // Five problems in four tables: two unknown keys, two wrong types
     // (one inside an array of tables), one value out of range.

@@ -24,6 +24,11 @@
 //! `scripts/referee/check_rejects.sh` shows that this test fails on a
 //! change that moves the physics (the lazy refinement of
 //! `scripts/referee/lazy_refinement.patch`).
+//!
+//! The same comparison judges a sampling change outside the march, chosen
+//! in the survey: the rays that sample a cell across a resolved
+//! discontinuity (`[scanner] edge_rays`, issue 47), the default 4 × 4
+//! against 8 × 8 ([`edge_rays_keep_the_reference_statistics`]).
 
 use crate::kit::SurveyText;
 use lidarsim::output::{Component, PointRecord};
@@ -60,13 +65,50 @@ const STATISTICS: [&str; 12] = [
 /// integrating the density in `the_critical_value_is_students_t`.
 const T_CRITICAL: f64 = 5.465;
 
-/// Points of the test stand flown with `march` and survey seed `seed`
-/// (steps of 0.1 m: see the module documentation).
-fn fly(march: &str, seed: u64) -> Vec<PointRecord> {
+/// How a flight of the test stand samples the crowns and the cells.
+#[derive(Clone, Copy, Debug)]
+struct Sampling {
+    /// `[vegetation] march`.
+    march: &'static str,
+    /// `[vegetation] step_m`.
+    step_m: f64,
+    /// `[scanner] edge_rays`.
+    edge_rays: u32,
+}
+
+/// The reference march against the pulse march: steps of 0.1 m (see the
+/// module documentation), the default edge sampling.
+const REFERENCE_MARCH: Sampling = Sampling {
+    march: "sub-ray",
+    step_m: 0.1,
+    edge_rays: 16,
+};
+const PULSE_MARCH: Sampling = Sampling {
+    march: "pulse",
+    ..REFERENCE_MARCH
+};
+
+/// The default edge sampling (4 × 4 rays in a cell across a resolved
+/// discontinuity), with the default march and step.
+const DEFAULT_EDGES: Sampling = Sampling {
+    march: "pulse",
+    step_m: 0.3,
+    edge_rays: 16,
+};
+
+/// Points of the test stand flown with `sampling` and survey seed `seed`.
+fn fly(sampling: Sampling, seed: u64) -> Vec<PointRecord> {
+    let Sampling {
+        march,
+        step_m,
+        edge_rays,
+    } = sampling;
     let s = SurveyText::new(seed)
         .scanner(50_000.0, 4.0, 19)
-        .raw("scan_frequency_hz = 100\ndivergence_mrad = 0.5\nmax_returns = 5")
-        .raw(&format!("[vegetation]\nmarch = \"{march}\"\nstep_m = 0.1"))
+        .raw(&format!(
+            "scan_frequency_hz = 100\ndivergence_mrad = 0.5\nmax_returns = 5\nedge_rays = {edge_rays}"
+        ))
+        .raw(&format!("[vegetation]\nmarch = \"{march}\"\nstep_m = {step_m}"))
         .line([0.0, -30.0, 500.0], [0.0, 30.0, 500.0], 50.0)
         .ground("grass", 0.3, 100.0)
         .raw(
@@ -77,6 +119,14 @@ fn fly(march: &str, seed: u64) -> Vec<PointRecord> {
         .survey();
     let w = World::build(&s).unwrap_or_else(|e| panic!("{e}"));
     simulate_world_to_memory(&s, &w, 2)
+}
+
+/// The statistics of [`SEEDS`] flights with `sampling`, seeds from
+/// `first_seed` on.
+fn flights(sampling: Sampling, first_seed: u64) -> Vec<Statistics> {
+    (first_seed..first_seed + SEEDS)
+        .map(|seed| Statistics::of(&fly(sampling, seed)))
+        .collect()
 }
 
 /// The statistics of one flight.
@@ -251,26 +301,21 @@ fn the_tests_tell_different_samples_apart() {
     assert!(chi > CHI2_999[df - 1], "χ² {chi}");
 }
 
-#[test]
-fn the_pulse_march_keeps_the_reference_statistics() {
-    let flights = |march: &str, first_seed: u64| -> Vec<Statistics> {
-        (first_seed..first_seed + SEEDS)
-            .map(|seed| Statistics::of(&fly(march, seed)))
-            .collect()
-    };
-    let reference = flights("sub-ray", 100);
-    let pulse = flights("pulse", 200);
+/// The statistics on which `candidate`'s flights differ from
+/// `reference`'s beyond sampling error (empty: none), each with its t or
+/// χ²; the comparison printed.
+fn beyond_sampling_error(reference: &[Statistics], candidate: &[Statistics]) -> Vec<String> {
     let column = |flights: &[Statistics], k: usize| -> Vec<f64> {
         flights.iter().map(|f| f.values()[k]).collect()
     };
     assert!(
-        (reference.iter().chain(&pulse)).all(|f| f.under_canopy.0 > 5_000 && f.trunk.0 > 40),
+        (reference.iter().chain(candidate)).all(|f| f.under_canopy.0 > 5_000 && f.trunk.0 > 40),
         "too few pulses under canopy or trunk points to compare"
     );
     let mut failed = Vec::new();
-    println!("statistic: reference mean (seed-to-seed sd) | pulse march mean (sd) | t");
+    println!("statistic: reference mean (seed-to-seed sd) | candidate mean (sd) | t");
     for (k, name) in STATISTICS.iter().enumerate() {
-        let (a, b) = (column(&reference, k), column(&pulse, k));
+        let (a, b) = (column(reference, k), column(candidate, k));
         let (t, _) = t_statistic(&a, &b);
         println!(
             "{name}: {:.5} ({:.5}) | {:.5} ({:.5}) | {t:+.2}",
@@ -289,10 +334,33 @@ fn the_pulse_march_keeps_the_reference_statistics() {
             acc
         })
     };
-    let (chi, df) = chi_square(&pooled(&reference), &pooled(&pulse));
+    let (chi, df) = chi_square(&pooled(reference), &pooled(candidate));
     println!("return numbers, pooled: χ² {chi:.2} on {df} df");
     if chi >= CHI2_999[df - 1] {
         failed.push(format!("return numbers: χ² {chi:.2} on {df} df"));
     }
+    failed
+}
+
+#[test]
+fn the_pulse_march_keeps_the_reference_statistics() {
+    let reference = flights(REFERENCE_MARCH, 100);
+    let pulse = flights(PULSE_MARCH, 200);
+    let failed = beyond_sampling_error(&reference, &pulse);
+    assert!(failed.is_empty(), "beyond sampling error: {failed:?}");
+}
+
+/// The default edge sampling against a grid four times finer: a sampling
+/// change outside the march, and how far the default is from the finer
+/// limit.
+#[test]
+fn edge_rays_keep_the_reference_statistics() {
+    let finer = Sampling {
+        edge_rays: 64,
+        ..DEFAULT_EDGES
+    };
+    let reference = flights(DEFAULT_EDGES, 300);
+    let other = flights(finer, 400);
+    let failed = beyond_sampling_error(&reference, &other);
     assert!(failed.is_empty(), "beyond sampling error: {failed:?}");
 }

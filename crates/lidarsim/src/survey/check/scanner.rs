@@ -4,6 +4,7 @@
 use super::{Bounds, Checker};
 use crate::detection::{DetectorConfig, EchoDetection, ReturnSelection};
 use crate::message::num;
+use crate::sensor::beam::Fineness;
 use crate::survey::preset::{self, PresetUse};
 use crate::survey::raw::{RawReceiver, RawScanner};
 use crate::survey::{
@@ -49,6 +50,7 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
         (0.3, 0.3),
     );
     let subrays = c.count(sp.key("subrays"), s.subrays, 19, 1, 10_000) as usize;
+    let edge_fineness = edge_fineness(c, s, &sp);
     let pulse = pulse(c, s, &sp);
     let detector = echoes(c, s, &sp);
     let ranges = ranges(c, s, &sp, detector.detection);
@@ -78,6 +80,7 @@ pub(crate) fn scanner(c: &mut Checker, raw: &RawSurvey) -> Sensor {
             divergence_rad: divergence_mrad * 1e-3,
             divergence_along_rad: divergence_along_mrad * 1e-3,
             subrays,
+            edge_fineness,
             min_range_m: ranges.min_range_m,
             max_range_m: ranges.max_range_m,
             wavelength_nm,
@@ -144,6 +147,23 @@ fn prf(c: &mut Checker, s: &RawScanner, sp: &KeyPath) -> f64 {
         );
     }
     prf_hz
+}
+
+/// `edge_rays`: how finely a cell across a resolved discontinuity is
+/// sampled (a `k × k` grid).
+fn edge_fineness(c: &mut Checker, s: &RawScanner, sp: &KeyPath) -> Fineness {
+    let rays = s.edge_rays.unwrap_or(16);
+    let found = usize::try_from(rays).ok().and_then(Fineness::from_rays);
+    found.unwrap_or_else(|| {
+        c.err(
+            sp.key("edge_rays"),
+            format!(
+                "must be 16 (the default), 64 or 256 (a 4 × 4, 8 × 8 or 16 × 16 grid), \
+                 got {rays}"
+            ),
+        );
+        Fineness::Rays16
+    })
 }
 
 /// The laser pulse: its shape and width.
