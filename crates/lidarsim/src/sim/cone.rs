@@ -292,7 +292,10 @@ impl Simulator<'_> {
             pattern.close_outline(&mut cone.outline);
             if cone.outline.area() > 0.0 {
                 for &i in &cells {
-                    if pattern.cell_meets(i, &cone.outline) {
+                    // A cell the outline holds meets it: the cheap test first.
+                    if pattern.outline_holds_cell(i, &cone.outline)
+                        || pattern.cell_meets(i, &cone.outline)
+                    {
                         cone.add_patch(pattern, i, !hit_by(i));
                     }
                 }
