@@ -49,9 +49,33 @@ pub enum Purpose {
 
 const GOLDEN: u64 = 0x9E37_79B9_7F4A_7C15;
 
+/// Substreams whose salt is worked out at compile time.
+const SALTED: usize = 1024;
+
+/// [`substream_salt`] of the first [`SALTED`] substreams.
+const SALTS: [u64; SALTED] = {
+    let mut t = [0; SALTED];
+    let mut i = 0;
+    while i < SALTED {
+        t[i] = mix64((i as u64 + 1).wrapping_mul(GOLDEN));
+        i += 1;
+    }
+    t
+};
+
+/// What substream `i` mixes into its parent's key: `mix64((i + 1)·φ)`,
+/// from a table for the first ones (a pulse's sub-rays and fine rays).
+#[inline]
+fn substream_salt(i: u64) -> u64 {
+    match usize::try_from(i).ok().and_then(|k| SALTS.get(k)) {
+        Some(&salt) => salt,
+        None => mix64(i.wrapping_add(1).wrapping_mul(GOLDEN)),
+    }
+}
+
 /// SplitMix64 finaliser: a bijective 64-bit mixing function.
 #[inline]
-pub fn mix64(mut z: u64) -> u64 {
+pub const fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -125,7 +149,7 @@ impl Stream {
     #[inline]
     pub fn substream(&self, i: u64) -> Stream {
         Stream {
-            key: mix64(self.key ^ mix64(i.wrapping_add(1).wrapping_mul(GOLDEN))),
+            key: mix64(self.key ^ substream_salt(i)),
             counter: 0,
         }
     }
@@ -194,6 +218,20 @@ mod tests {
             let mut o = other;
             let c: Vec<u64> = (0..8).map(|_| o.next_u64()).collect();
             assert!(a.iter().zip(&c).all(|(x, y)| x != y));
+        }
+    }
+
+    #[test]
+    fn substream_salts_are_splitmix64_outputs() {
+        // SplitMix64 seeded with 0 gives mix64(k·φ) as its k-th output:
+        // 0xE220A8397B1DCDAF, then 0x6E789E6AA1B965F4 (Steele, Lea & Flood
+        // 2014; the reference generator's published first outputs).
+        assert_eq!(substream_salt(0), 0xE220_A839_7B1D_CDAF);
+        assert_eq!(substream_salt(1), 0x6E78_9E6A_A1B9_65F4);
+        // The table's last entry and the first one past it follow the same
+        // rule.
+        for i in [SALTED as u64 - 1, SALTED as u64, 1 << 40] {
+            assert_eq!(substream_salt(i), mix64((i + 1).wrapping_mul(GOLDEN)));
         }
     }
 
