@@ -567,15 +567,13 @@ mod tests {
         assert!(o.corners().is_empty());
     }
 
-    /// A cell meets an outline exactly when some point lies in both:
-    /// against a fine grid of points, over random cells and outlines.
-    #[test]
-    fn cells_meet_outlines_that_share_a_point() {
-        let mut rng = crate::rng::Stream::new(8, 0, 0, crate::rng::Purpose::Test);
-        let sites: Vec<PlanePoint> = (0..12)
+    /// Voronoi cells of `n` random sites in the square `[−1, 1]²`, within
+    /// the rim around radius 1.5.
+    fn random_cells(rng: &mut crate::rng::Stream, n: usize) -> Vec<Cell> {
+        let sites: Vec<PlanePoint> = (0..n)
             .map(|_| [rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0])
             .collect();
-        let cells: Vec<Cell> = (0..sites.len())
+        (0..sites.len())
             .map(|i| {
                 let mut near: Vec<(f64, usize)> = (0..sites.len())
                     .filter(|&j| j != i)
@@ -584,7 +582,56 @@ mod tests {
                 near.sort_by(|a, b| a.0.total_cmp(&b.0));
                 Cell::voronoi(&sites, i, &near, 1.5)
             })
-            .collect();
+            .collect()
+    }
+
+    /// An outline that holds a cell's disk holds the whole cell: every
+    /// corner of it inside the outline, the cell meeting it, and the
+    /// outline clipped to the cell the whole cell. Over random cells and
+    /// random convex outlines (hulls of 3 to 8 points) of all sizes.
+    #[test]
+    fn an_outline_holding_the_disk_holds_the_cell() {
+        let mut rng = crate::rng::Stream::new(9, 0, 0, crate::rng::Purpose::Test);
+        let cells = random_cells(&mut rng, 40);
+        let (mut held, mut not_held) = (0, 0);
+        for _ in 0..400 {
+            let c = [rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0];
+            let size = 0.5 + rng.uniform() * 5.0;
+            let k = 3 + (rng.uniform() * 6.0) as usize;
+            let pts: Vec<PlanePoint> = (0..k)
+                .map(|_| {
+                    [
+                        c[0] + size * (rng.uniform() - 0.5),
+                        c[1] + size * (rng.uniform() - 0.5),
+                    ]
+                })
+                .collect();
+            let o = outline(&pts);
+            for cell in &cells {
+                let (site, radius) = cell.disk();
+                if !o.holds_disk(site, radius) {
+                    not_held += 1;
+                    continue;
+                }
+                held += 1;
+                assert!(cell.corners.iter().all(|&p| o.contains(p)), "{pts:?}");
+                assert!(cell.meets(&o), "{pts:?}");
+                let mut part = Outline::default();
+                part.copy_from(&o);
+                part.clip_to_cell(cell);
+                assert!((part.area() / cell.area() - 1.0).abs() < 1e-9, "{pts:?}");
+            }
+        }
+        // Both answers are given often: the test can tell a wrong one.
+        assert!(held > 200 && not_held > 1000, "{held} {not_held}");
+    }
+
+    /// A cell meets an outline exactly when some point lies in both:
+    /// against a fine grid of points, over random cells and outlines.
+    #[test]
+    fn cells_meet_outlines_that_share_a_point() {
+        let mut rng = crate::rng::Stream::new(8, 0, 0, crate::rng::Purpose::Test);
+        let cells = random_cells(&mut rng, 12);
         let (mut met, mut apart) = (0, 0);
         for _ in 0..300 {
             let c = [rng.uniform() * 3.0 - 1.5, rng.uniform() * 3.0 - 1.5];
