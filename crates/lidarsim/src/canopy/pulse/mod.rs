@@ -13,7 +13,9 @@
 //! over sub-rays without branches that the compiler vectorises, eight
 //! sub-rays to a register in `f32` (offsets of metres from the stem, exact
 //! to micrometres). A crown whose envelope the whole pulse misses at a
-//! level is skipped after one test of the pulse's centre; above the depth
+//! level is skipped after one test of the pulse's centre, and so is one
+//! whose hollow core (the physical model's, inside its foliated shell)
+//! holds the whole pulse there; above the depth
 //! where its envelope first grows wide enough for the pulse to reach it
 //! (worked out once per pulse, [`first_reach`]) it is not looked at, and a
 //! level that no envelope can reach costs nothing more.
@@ -45,6 +47,7 @@ use super::{CanopyConfig, Fate, Marching};
 use crate::accel::{VolumeSpan, spans_along};
 use crate::geometry::{DVec3, Ray};
 use crate::rng::Stream;
+use crate::scene::foliage::LevelField;
 use crate::scene::{Crown, CrownProfile, Scene, Shape};
 use lanes::{Cell, Lane, Lanes, Level32, W};
 
@@ -328,6 +331,15 @@ impl PulseMarch {
                 continue;
             }
             let level = m.profile.level_within(envelope);
+            // A physical crown's hollow core that holds the whole
+            // footprint adds no depth to any lane (each lies nearer the
+            // stem than the shell, by a margin far above the lanes' `f32`
+            // rounding): the row is left out.
+            if let LevelField::Physical { core_rc, .. } = level.field
+                && centre_sq.sqrt() + reach < core_rc * envelope.radius * (1.0 - 1e-5) - 1e-5
+            {
+                continue;
+            }
             self.rows.push(Row {
                 met: mi,
                 cell: Cell {
