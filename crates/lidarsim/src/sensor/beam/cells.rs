@@ -585,6 +585,24 @@ mod tests {
             .collect()
     }
 
+    /// `k` random points within `size` of `centre` (a square of that
+    /// side around it).
+    fn random_points(
+        rng: &mut crate::rng::Stream,
+        centre: PlanePoint,
+        size: f64,
+        k: usize,
+    ) -> Vec<PlanePoint> {
+        (0..k)
+            .map(|_| {
+                [
+                    centre[0] + size * (rng.uniform() - 0.5),
+                    centre[1] + size * (rng.uniform() - 0.5),
+                ]
+            })
+            .collect()
+    }
+
     /// An outline that holds a cell's disk holds the whole cell: every
     /// corner of it inside the outline, the cell meeting it, and the
     /// outline clipped to the cell the whole cell. Over random cells and
@@ -598,14 +616,7 @@ mod tests {
             let c = [rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0];
             let size = 0.5 + rng.uniform() * 5.0;
             let k = 3 + (rng.uniform() * 6.0) as usize;
-            let pts: Vec<PlanePoint> = (0..k)
-                .map(|_| {
-                    [
-                        c[0] + size * (rng.uniform() - 0.5),
-                        c[1] + size * (rng.uniform() - 0.5),
-                    ]
-                })
-                .collect();
+            let pts = random_points(&mut rng, c, size, k);
             let o = outline(&pts);
             for cell in &cells {
                 let (site, radius) = cell.disk();
@@ -636,14 +647,7 @@ mod tests {
         for _ in 0..300 {
             let c = [rng.uniform() * 3.0 - 1.5, rng.uniform() * 3.0 - 1.5];
             let size = rng.uniform() * 0.3;
-            let pts: Vec<PlanePoint> = (0..3)
-                .map(|_| {
-                    [
-                        c[0] + size * (rng.uniform() - 0.5),
-                        c[1] + size * (rng.uniform() - 0.5),
-                    ]
-                })
-                .collect();
+            let pts = random_points(&mut rng, c, size, 3);
             let o = outline(&pts);
             for cell in &cells {
                 // Points of the triangle, on a fine barycentric grid.
