@@ -150,8 +150,7 @@ impl Cell {
         }
         let mut fan = Vec::with_capacity(corners.len());
         let mut total = 0.0;
-        for (k, &a) in corners.iter().enumerate() {
-            let b = corners[next(k, corners.len())];
+        for (a, b) in sides(&corners) {
             total += 0.5 * cross(sub(a, site), sub(b, site)).max(0.0);
             fan.push(total);
         }
@@ -207,8 +206,7 @@ impl Cell {
     /// Whether `p` lies in the cell (its edges included, within `tol`).
     #[cfg(test)]
     pub(super) fn contains(&self, p: PlanePoint, tol: f64) -> bool {
-        self.corners.iter().enumerate().all(|(k, &a)| {
-            let b = self.corners[next(k, self.corners.len())];
+        sides(&self.corners).all(|(a, b)| {
             let e = sub(b, a);
             cross(e, sub(p, a)) >= -tol * e[0].hypot(e[1])
         })
@@ -484,9 +482,8 @@ impl Outline {
         if h.len() < 3 {
             return 0.0;
         }
-        (0..h.len())
-            .map(|k| {
-                let (a, b) = (h[k], h[next(k, h.len())]);
+        sides(h)
+            .map(|(a, b)| {
                 let e = sub(b, a);
                 let len = e[0].hypot(e[1]);
                 if len == 0.0 {
