@@ -501,6 +501,12 @@ impl BeamPattern {
         self.cells[i].meets(outline)
     }
 
+    /// Whether cell `i` may meet the convex `outline` (a cheap test:
+    /// `false` is apart, `true` may still be).
+    pub fn cell_may_meet(&self, i: usize, outline: &Outline) -> bool {
+        self.cells[i].may_meet(outline)
+    }
+
     /// Lower and upper bounds of `n · (X, stretch·Y, 1)` over the points
     /// `(X, Y)` of cell `i` (`None`: over all cells), the directions of a
     /// plane's normal `n` times the beam's unnormalised directions there:

@@ -118,9 +118,11 @@ fn cut_near(poly: &[DVec3], out: &mut Vec<DVec3>) {
 impl ConeScratch {
     /// A patch of cell `cell`: `outline`'s part in it, kept when that part
     /// has an area and, for `whole_too` false, does not fill the cell.
-    fn add_patch(&mut self, pattern: &BeamPattern, cell: usize, whole_too: bool) {
+    /// `holds`: whether the outline holds the cell's disk (so the whole
+    /// cell). An outline the cell does not meet clips to nothing.
+    fn add_patch(&mut self, pattern: &BeamPattern, cell: usize, (whole_too, holds): (bool, bool)) {
         // An outline that holds the whole cell fills it, without clipping.
-        if !whole_too && pattern.outline_holds_cell(cell, &self.outline) {
+        if !whole_too && holds {
             return;
         }
         if self.used == self.patches.len() {
@@ -292,11 +294,13 @@ impl Simulator<'_> {
             pattern.close_outline(&mut cone.outline);
             if cone.outline.area() > 0.0 {
                 for &i in &cells {
-                    // A cell the outline holds meets it: the cheap test first.
-                    if pattern.outline_holds_cell(i, &cone.outline)
-                        || pattern.cell_meets(i, &cone.outline)
-                    {
-                        cone.add_patch(pattern, i, !hit_by(i));
+                    // A cell the outline holds meets it; one that may meet
+                    // it is clipped, which leaves nothing where they are
+                    // apart (cheaper than testing first: most that may
+                    // meet do).
+                    let holds = pattern.outline_holds_cell(i, &cone.outline);
+                    if holds || pattern.cell_may_meet(i, &cone.outline) {
+                        cone.add_patch(pattern, i, (!hit_by(i), holds));
                     }
                 }
             }

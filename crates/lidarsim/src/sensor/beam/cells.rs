@@ -212,20 +212,22 @@ impl Cell {
         })
     }
 
-    /// Whether the cell meets the convex `outline`.
-    pub(super) fn meets(&self, outline: &Outline) -> bool {
+    /// Whether the disk around the site that holds the cell meets the
+    /// box of `outline` (a cheap test: `true` may still be apart).
+    pub(super) fn may_meet(&self, outline: &Outline) -> bool {
         let Some((lo, hi)) = outline.bounds() else {
             return false;
         };
-        // The disk around the site that holds the cell, against the
-        // outline's box.
         let dx = (lo[0] - self.site[0]).max(self.site[0] - hi[0]).max(0.0);
         let dy = (lo[1] - self.site[1]).max(self.site[1] - hi[1]).max(0.0);
-        if dx.hypot(dy) > self.radius {
-            return false;
-        }
-        !(self.edge_separates(&outline.hull)
-            || separates(&outline.hull, &self.corners, &outline.hull))
+        dx.hypot(dy) <= self.radius
+    }
+
+    /// Whether the cell meets the convex `outline`.
+    pub(super) fn meets(&self, outline: &Outline) -> bool {
+        self.may_meet(outline)
+            && !(self.edge_separates(&outline.hull)
+                || separates(&outline.hull, &self.corners, &outline.hull))
     }
 
     /// Whether an edge of the cell separates it from the convex polygon
@@ -632,6 +634,44 @@ mod tests {
         }
         // Both answers are given often: the test can tell a wrong one.
         assert!(held > 200 && not_held > 1000, "{held} {not_held}");
+    }
+
+    /// Cone sampling clips an outline to every cell whose disk meets the
+    /// outline's box, instead of testing first whether they meet: where
+    /// the separating-axis test finds them apart, clipping leaves no area
+    /// (and where the cheap test says apart, so does the exact one). Over
+    /// random cells and outlines, many of them beside a cell.
+    #[test]
+    fn outlines_apart_from_a_cell_clip_to_nothing() {
+        let mut rng = crate::rng::Stream::new(10, 0, 0, crate::rng::Purpose::Test);
+        let cells = random_cells(&mut rng, 20);
+        let (mut near_but_apart, mut met) = (0, 0);
+        for _ in 0..1000 {
+            let c = [rng.uniform() * 3.0 - 1.5, rng.uniform() * 3.0 - 1.5];
+            let size = 0.02 + rng.uniform() * 1.5;
+            let k = 3 + (rng.uniform() * 6.0) as usize;
+            let o = outline(&random_points(&mut rng, c, size, k));
+            for cell in &cells {
+                let meets = cell.meets(&o);
+                if !cell.may_meet(&o) {
+                    assert!(!meets);
+                    continue;
+                }
+                let mut part = Outline::default();
+                part.copy_from(&o);
+                part.clip_to_cell(cell);
+                if meets {
+                    met += 1;
+                } else {
+                    near_but_apart += 1;
+                    assert_eq!(part.area(), 0.0, "{o:?}");
+                }
+            }
+        }
+        assert!(
+            near_but_apart > 1000 && met > 1000,
+            "{near_but_apart} {met}"
+        );
     }
 
     /// A cell meets an outline exactly when some point lies in both:
