@@ -101,11 +101,16 @@ fn dist(a: PlanePoint, b: PlanePoint) -> f64 {
 }
 
 /// The part of the convex polygon `poly` where `dot(x, n) ≤ c`
-/// (Sutherland & Hodgman 1974, one plane), into `out`.
+/// (Sutherland & Hodgman 1974, one plane), into `out`: its sides in
+/// order, each corner's distance worked out once.
 fn clip(poly: &[PlanePoint], n: PlanePoint, c: f64, out: &mut Vec<PlanePoint>) {
     out.clear();
-    for (a, b) in sides(poly) {
-        let (da, db) = (dot(a, n) - c, dot(b, n) - c);
+    let Some(&first) = poly.first() else {
+        return;
+    };
+    let (mut a, mut da) = (first, dot(first, n) - c);
+    for &b in poly[1..].iter().chain([&first]) {
+        let db = dot(b, n) - c;
         if da <= 0.0 {
             out.push(a);
         }
@@ -113,6 +118,7 @@ fn clip(poly: &[PlanePoint], n: PlanePoint, c: f64, out: &mut Vec<PlanePoint>) {
             let f = da / (da - db);
             out.push([a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1])]);
         }
+        (a, da) = (b, db);
     }
 }
 
