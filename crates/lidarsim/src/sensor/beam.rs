@@ -445,17 +445,19 @@ impl BeamPattern {
     ) -> f64 {
         let grid = &self.patch_grid;
         let stratum = patch.area() / grid.len() as f64 * self.norm;
-        let mut sum = 0.0;
-        for &[a, b] in grid {
-            let x = patch.sample(a, b);
-            if !keep(x) {
-                continue;
+        patch.with_fan(|fan| {
+            let mut sum = 0.0;
+            for &[a, b] in grid {
+                let x = fan.sample(a, b);
+                if !keep(x) {
+                    continue;
+                }
+                let share = stratum * self.irradiance(x);
+                sum += share;
+                out.push((self.direction(x), share));
             }
-            let share = stratum * self.irradiance(x);
-            sum += share;
-            out.push((self.direction(x), share));
-        }
-        sum
+            sum
+        })
     }
 
     /// Makes `outline` its part within cell `i`.

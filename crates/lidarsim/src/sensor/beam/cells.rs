@@ -279,6 +279,46 @@ fn separates(edges: &[PlanePoint], a: &[PlanePoint], b: &[PlanePoint]) -> bool {
     })
 }
 
+/// An outline's fan of triangles ([`Outline::with_fan`]).
+pub(super) struct Fan<'a> {
+    hull: &'a [PlanePoint],
+    /// The mean of the corners.
+    site: PlanePoint,
+    /// The area of the triangle from `site` to each side.
+    tris: &'a [f64],
+    /// Their sum.
+    total: f64,
+}
+
+impl Fan<'_> {
+    /// The point that `(a, b)` of the unit square maps to, area for area,
+    /// as [`Cell::sample`] maps it onto a cell: `a` picks the triangle and
+    /// the place along its outer side, `√b` the distance from the site
+    /// towards it. Needs an area.
+    pub(super) fn sample(&self, a: f64, b: f64) -> PlanePoint {
+        let (h, tris, site) = (self.hull, self.tris, self.site);
+        let mut s = a * self.total;
+        let mut k = 0;
+        while k + 1 < h.len() && s >= tris[k] {
+            s -= tris[k];
+            k += 1;
+        }
+        let width = tris[k];
+        let t = if width > 0.0 {
+            (s / width).clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        let (p, q) = (h[k], h[next(k, h.len())]);
+        let edge = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
+        let f = b.sqrt();
+        [
+            site[0] + f * (edge[0] - site[0]),
+            site[1] + f * (edge[1] - site[1]),
+        ]
+    }
+}
+
 /// The convex outline of a target in a pattern's plane: the hull of the
 /// points given ([`Outline::push`]), made by
 /// [`super::BeamPattern::close_outline`]. It keeps its storage between
@@ -442,33 +482,31 @@ impl Outline {
         h.len() >= 3 && sides(h).all(|(a, b)| cross(sub(b, a), sub(p, a)) >= 0.0)
     }
 
-    /// The point that `(a, b)` of the unit square maps to, area for area,
-    /// as [`Cell::sample`] maps it onto a cell: the fan of triangles from
-    /// the mean of the corners (inside the convex outline). Needs an area.
-    pub(super) fn sample(&self, a: f64, b: f64) -> PlanePoint {
+    /// `f` given the outline's fan: the triangles from the mean of its
+    /// corners (inside the convex outline) to each side, which
+    /// [`Fan::sample`] maps the unit square onto. Their areas are worked
+    /// out once here, on the stack for up to 32 corners.
+    pub(super) fn with_fan<R>(&self, f: impl FnOnce(&Fan) -> R) -> R {
         let h = &self.hull;
-        let site = self.centre();
-        let tri = |k: usize| 0.5 * cross(sub(h[k], site), sub(h[next(k, h.len())], site)).max(0.0);
-        let total: f64 = (0..h.len()).map(tri).sum();
-        let mut s = a * total;
-        let mut k = 0;
-        while k + 1 < h.len() && s >= tri(k) {
-            s -= tri(k);
-            k += 1;
-        }
-        let width = tri(k);
-        let t = if width > 0.0 {
-            (s / width).clamp(0.0, 1.0)
+        let mut stack = [0.0; 32];
+        let mut heap = Vec::new();
+        let tris = if h.len() <= stack.len() {
+            &mut stack[..h.len()]
         } else {
-            0.5
+            heap.resize(h.len(), 0.0);
+            &mut heap[..]
         };
-        let (p, q) = (h[k], h[next(k, h.len())]);
-        let edge = [p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])];
-        let f = b.sqrt();
-        [
-            site[0] + f * (edge[0] - site[0]),
-            site[1] + f * (edge[1] - site[1]),
-        ]
+        let site = self.centre();
+        for (k, t) in tris.iter_mut().enumerate() {
+            *t = 0.5 * cross(sub(h[k], site), sub(h[next(k, h.len())], site)).max(0.0);
+        }
+        let total = tris.iter().sum();
+        f(&Fan {
+            hull: h,
+            site,
+            tris,
+            total,
+        })
     }
 
     /// Lower and upper corners of its box (`None`: empty).
