@@ -46,12 +46,14 @@
 //! are not refined.
 
 mod cells;
+mod fine;
 
 pub use cells::{Outline, PlanePoint};
 
 use crate::geometry::{DMat3, DVec3};
 use crate::rng::Stream;
 use cells::Cell;
+use fine::{FineSample, FineTables};
 
 /// Precomputed jittered patterns (fewer for very large N, so that they take
 /// at most about 2¹⁶ sub-rays in all).
@@ -143,6 +145,9 @@ pub struct BeamPattern {
     /// Per [`Fineness`], its jittered grid of the unit square (this
     /// pattern's own jitter), which the fine samples map onto a cell.
     grids: [Vec<[f64; 2]>; 3],
+    /// Per [`Fineness`], every cell's fine samples, worked out when first
+    /// asked for.
+    fine: FineTables,
     /// The jittered 2 × 2 grid of the unit square that a patch's samples
     /// map onto it ([`BeamPattern::patch_samples`]).
     patch_grid: [[f64; 2]; PATCH_RAYS],
@@ -292,6 +297,7 @@ impl BeamPattern {
             energy,
             neighbours,
             grids,
+            fine: FineTables::default(),
             patch_grid,
             reach,
             norm,
@@ -310,6 +316,7 @@ impl BeamPattern {
             energy: Vec::new(),
             neighbours: Vec::new(),
             grids: [Vec::new(), Vec::new(), Vec::new()],
+            fine: FineTables::default(),
             patch_grid: [[0.5; 2]; PATCH_RAYS],
             reach: 0.0,
             norm: 0.0,
@@ -369,19 +376,36 @@ impl BeamPattern {
     /// the shares adding up to the cell's energy
     /// ([`BeamPattern::cell_energy`]).
     pub fn fine_samples(&self, i: usize, fineness: Fineness, out: &mut Vec<(DVec3, f64)>) {
-        let cell = &self.cells[i];
         let start = out.len();
         let mut sum = 0.0;
-        for &[a, b] in &self.grids[fineness as usize] {
-            let [x, y] = cell.sample(a, b);
-            let weight = (-2.0 * (x * x + y * y) / (self.w * self.w)).exp();
-            sum += weight;
-            out.push((DVec3::new(x, self.stretch_y * y, 1.0).normalize(), weight));
+        for s in self.fine_table(i, fineness) {
+            sum += s.weight;
+            out.push((s.dir, s.weight));
         }
         let scale = self.energy[i] / sum;
         for s in &mut out[start..] {
             s.1 *= scale;
         }
+    }
+
+    /// The fine samples of cell `i` at `fineness`: its grid mapped onto
+    /// the cell, each point's direction and irradiance.
+    fn fine_table(&self, i: usize, fineness: Fineness) -> &[FineSample] {
+        let grid = &self.grids[fineness as usize];
+        self.fine.get(fineness as usize, i, grid.len(), || {
+            (self.cells.iter())
+                .flat_map(|cell| {
+                    grid.iter().map(|&[a, b]| {
+                        let x = cell.sample(a, b);
+                        FineSample {
+                            x,
+                            dir: self.direction(x),
+                            weight: self.irradiance(x),
+                        }
+                    })
+                })
+                .collect()
+        })
     }
 
     /// The rays sampling the part of cell `i` where `keep` holds, as
@@ -397,17 +421,14 @@ impl BeamPattern {
         energy: f64,
         out: &mut Vec<(DVec3, f64)>,
     ) -> usize {
-        let cell = &self.cells[i];
         let start = out.len();
         let mut sum = 0.0;
-        for &[a, b] in &self.grids[fineness as usize] {
-            let x = cell.sample(a, b);
-            if !keep(x) {
+        for s in self.fine_table(i, fineness) {
+            if !keep(s.x) {
                 continue;
             }
-            let weight = self.irradiance(x);
-            sum += weight;
-            out.push((self.direction(x), weight));
+            sum += s.weight;
+            out.push((s.dir, s.weight));
         }
         if sum > 0.0 {
             let scale = energy / sum;
