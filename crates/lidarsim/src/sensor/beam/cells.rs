@@ -437,12 +437,16 @@ impl Outline {
     /// Whether the outline holds the whole disk of radius `r` around `c`
     /// (every edge's line at least `r` from `c`, on its inner side, with a
     /// margin for rounding): a cell inside that disk is inside the outline.
+    /// Distances compared squared: the margin is far above the rounding
+    /// that adds.
     pub(super) fn holds_disk(&self, c: PlanePoint, r: f64) -> bool {
         let h = &self.hull;
+        let reach = r * (1.0 + 1e-9);
         h.len() >= 3
             && sides(h).all(|(a, b)| {
                 let e = sub(b, a);
-                cross(e, sub(c, a)) >= r * (1.0 + 1e-9) * e[0].hypot(e[1])
+                let d = cross(e, sub(c, a));
+                d >= 0.0 && d * d >= reach * reach * dot(e, e)
             })
     }
 
