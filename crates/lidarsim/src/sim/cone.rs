@@ -100,11 +100,15 @@ fn corners_of(
 }
 
 /// The planar polygon `poly` (beam frame) cut to `q.z ≥ NEAREST_M`
-/// (Sutherland & Hodgman 1974), into `out`.
+/// (Sutherland & Hodgman 1974), into `out`: its sides in order, the last
+/// closing to the first.
 fn cut_near(poly: &[DVec3], out: &mut Vec<DVec3>) {
     out.clear();
-    for (k, &a) in poly.iter().enumerate() {
-        let b = poly[(k + 1) % poly.len()];
+    let Some(&first) = poly.first() else {
+        return;
+    };
+    let mut a = first;
+    for &b in poly[1..].iter().chain([&first]) {
         let (da, db) = (a.z - NEAREST_M, b.z - NEAREST_M);
         if da >= 0.0 {
             out.push(a);
@@ -112,6 +116,7 @@ fn cut_near(poly: &[DVec3], out: &mut Vec<DVec3>) {
         if (da < 0.0 && db > 0.0) || (da > 0.0 && db < 0.0) {
             out.push(a + (b - a) * (da / (da - db)));
         }
+        a = b;
     }
 }
 
@@ -380,5 +385,42 @@ impl Simulator<'_> {
             left -= energy;
         }
         left.max(0.0) / coarse.max(1) as f64
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A square across the plane `z = NEAREST_M` keeps its corners in
+    /// front and gains the two points where its sides cross the plane, in
+    /// the order of its sides; one wholly in front is kept as it is, one
+    /// wholly behind is cut away.
+    #[test]
+    fn cut_near_keeps_the_part_in_front() {
+        let square = [
+            DVec3::new(0.0, 0.0, -1.0),
+            DVec3::new(1.0, 0.0, -1.0),
+            DVec3::new(1.0, 0.0, 1.0),
+            DVec3::new(0.0, 0.0, 1.0),
+        ];
+        let mut out = Vec::new();
+        cut_near(&square, &mut out);
+        let want = [
+            DVec3::new(1.0, 0.0, NEAREST_M),
+            DVec3::new(1.0, 0.0, 1.0),
+            DVec3::new(0.0, 0.0, 1.0),
+            DVec3::new(0.0, 0.0, NEAREST_M),
+        ];
+        assert_eq!(out.len(), want.len(), "{out:?}");
+        for (got, want) in out.iter().zip(want) {
+            assert!((*got - want).length() < 1e-15, "{out:?}");
+        }
+        let ahead = square.map(|q| q + DVec3::new(0.0, 0.0, 2.0));
+        cut_near(&ahead, &mut out);
+        assert_eq!(out, ahead);
+        let behind = square.map(|q| q - DVec3::new(0.0, 0.0, 2.0));
+        cut_near(&behind, &mut out);
+        assert!(out.is_empty());
     }
 }
