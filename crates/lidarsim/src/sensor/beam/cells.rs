@@ -650,6 +650,25 @@ mod tests {
             .collect()
     }
 
+    /// A random convex outline: the hull of 3 to 8 points spread over
+    /// `size` around a centre within `spread` of the origin (each axis),
+    /// `size` uniform in `min + [0, span)`; and the points.
+    fn random_outline(
+        rng: &mut crate::rng::Stream,
+        spread: f64,
+        (min, span): (f64, f64),
+    ) -> (Vec<PlanePoint>, Outline) {
+        let c = [
+            rng.uniform() * 2.0 * spread - spread,
+            rng.uniform() * 2.0 * spread - spread,
+        ];
+        let size = min + rng.uniform() * span;
+        let k = 3 + (rng.uniform() * 6.0) as usize;
+        let pts = random_points(rng, c, size, k);
+        let o = outline(&pts);
+        (pts, o)
+    }
+
     /// An outline that holds a cell's disk holds the whole cell: every
     /// corner of it inside the outline, the cell meeting it, and the
     /// outline clipped to the cell the whole cell. Over random cells and
@@ -660,11 +679,7 @@ mod tests {
         let cells = random_cells(&mut rng, 40);
         let (mut held, mut not_held) = (0, 0);
         for _ in 0..400 {
-            let c = [rng.uniform() * 2.0 - 1.0, rng.uniform() * 2.0 - 1.0];
-            let size = 0.5 + rng.uniform() * 5.0;
-            let k = 3 + (rng.uniform() * 6.0) as usize;
-            let pts = random_points(&mut rng, c, size, k);
-            let o = outline(&pts);
+            let (pts, o) = random_outline(&mut rng, 1.0, (0.5, 5.0));
             for cell in &cells {
                 let (site, radius) = cell.disk();
                 if !o.holds_disk(site, radius) {
@@ -695,10 +710,7 @@ mod tests {
         let cells = random_cells(&mut rng, 20);
         let (mut near_but_apart, mut met) = (0, 0);
         for _ in 0..1000 {
-            let c = [rng.uniform() * 3.0 - 1.5, rng.uniform() * 3.0 - 1.5];
-            let size = 0.02 + rng.uniform() * 1.5;
-            let k = 3 + (rng.uniform() * 6.0) as usize;
-            let o = outline(&random_points(&mut rng, c, size, k));
+            let (_, o) = random_outline(&mut rng, 1.5, (0.02, 1.5));
             for cell in &cells {
                 let meets = cell.meets(&o);
                 if !cell.may_meet(&o) {
