@@ -519,13 +519,9 @@ impl BeamPattern {
         outline.holds_disk(site, radius)
     }
 
-    /// Whether cell `i` meets the convex `outline`.
-    pub fn cell_meets(&self, i: usize, outline: &Outline) -> bool {
-        self.cells[i].meets(outline)
-    }
-
     /// Whether cell `i` may meet the convex `outline` (a cheap test:
-    /// `false` is apart, `true` may still be).
+    /// `false` is apart, `true` may still be: clipping to the cell then
+    /// leaves nothing).
     pub fn cell_may_meet(&self, i: usize, outline: &Outline) -> bool {
         self.cells[i].may_meet(outline)
     }

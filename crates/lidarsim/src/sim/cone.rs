@@ -125,7 +125,7 @@ impl ConeScratch {
     /// has an area and, for `whole_too` false, does not fill the cell.
     /// `holds`: whether the outline holds the cell's disk (so the whole
     /// cell). An outline the cell does not meet clips to nothing.
-    fn add_patch(&mut self, pattern: &BeamPattern, cell: usize, (whole_too, holds): (bool, bool)) {
+    fn add_patch(&mut self, pattern: &BeamPattern, cell: usize, whole_too: bool, holds: bool) {
         // An outline that holds the whole cell fills it, without clipping.
         if !whole_too && holds {
             return;
@@ -152,7 +152,7 @@ struct Pulse<'a> {
     from_world: DMat3,
     trace: &'a PulseTrace,
     /// The cells sampled again across a discontinuity (empty: none).
-    marked: &'a [Option<Fineness>],
+    marked: &'a [bool],
     /// The farthest closest hit, infinite when a sub-ray misses.
     farthest: f64,
 }
@@ -167,7 +167,7 @@ impl Pulse<'_> {
 
     /// Whether cell `i` is sampled again across a discontinuity.
     fn marked(&self, i: usize) -> bool {
-        self.marked.get(i).copied().flatten().is_some()
+        self.marked.get(i).copied().unwrap_or(false)
     }
 }
 
@@ -181,7 +181,7 @@ impl Simulator<'_> {
         (origin, to_world): (DVec3, DMat3),
         pattern: &BeamPattern,
         trace: &PulseTrace,
-        marked: &[Option<Fineness>],
+        marked: &[bool],
         cone: &mut ConeScratch,
     ) -> bool {
         cone.used = 0;
@@ -305,7 +305,7 @@ impl Simulator<'_> {
                     // meet do).
                     let holds = pattern.outline_holds_cell(i, &cone.outline);
                     if holds || pattern.cell_may_meet(i, &cone.outline) {
-                        cone.add_patch(pattern, i, (!hit_by(i), holds));
+                        cone.add_patch(pattern, i, !hit_by(i), holds);
                     }
                 }
             }
@@ -317,15 +317,16 @@ impl Simulator<'_> {
     /// each cell has in `counts` (0: its sub-ray alone, carrying the
     /// returned share). The patches of `cone` are sampled on their own,
     /// smallest first, each without the samples in a smaller one; a cell
-    /// marked in `marked` (across a discontinuity) is sampled at its
-    /// fineness and one whose sub-ray a patch covers at the fineness
-    /// `edge`, without the samples in its patches; a patched cell's sub-ray
+    /// marked in `marked` (across a discontinuity) and one whose sub-ray a
+    /// patch covers are sampled at the fineness `edge`, without the samples
+    /// in their patches; a patched cell's sub-ray
     /// otherwise carries what its patches do not. Returns the share of
     /// each sub-ray whose cell is neither marked nor patched: what the
     /// others leave of the pulse's energy.
     pub(super) fn sample_cells(
-        (pattern, edge): (&BeamPattern, Fineness),
-        marked: &[Option<Fineness>],
+        pattern: &BeamPattern,
+        edge: Fineness,
+        marked: &[bool],
         cone: &ConeScratch,
         fine: &mut Vec<(DVec3, f64)>,
         counts: &mut Vec<u32>,
@@ -343,8 +344,8 @@ impl Simulator<'_> {
                 k += 1;
             }
             let mine = &patches[start..k];
-            let fineness = marked.get(i).copied().flatten();
-            if mine.is_empty() && fineness.is_none() {
+            let across = marked.get(i).copied().unwrap_or(false);
+            if mine.is_empty() && !across {
                 coarse += 1;
                 continue;
             }
@@ -366,9 +367,8 @@ impl Simulator<'_> {
             let rest = energy - in_patches;
             let in_any = |x| mine.iter().any(|p| p.shape.contains(x));
             let patched = fine.len();
-            if fineness.is_some() || in_any(pattern.site(i)) {
-                let f = fineness.unwrap_or(edge);
-                let kept = pattern.fine_samples_where(i, f, |x| !in_any(x), rest, fine);
+            if across || in_any(pattern.site(i)) {
+                let kept = pattern.fine_samples_where(i, edge, |x| !in_any(x), rest, fine);
                 if kept == 0 && in_patches > 0.0 {
                     // The patches cover every sample: they take the cell.
                     for s in &mut fine[before..patched] {

@@ -26,7 +26,7 @@ use crate::radiometry::surface_return;
 use crate::rng::{Purpose, Stream};
 use crate::scene::{MEDIUM_VEGETATION_MAX_M, Shape, SurfaceClass};
 use crate::sensor::Pose;
-use crate::sensor::beam::{BeamPattern, Fineness};
+use crate::sensor::beam::BeamPattern;
 use crate::sensor::navigation::observed_pose;
 use crate::sensor::platform::FlightLine;
 use crate::waveform::Return;
@@ -237,7 +237,7 @@ impl Simulator<'_> {
             return Sampling::Coarse;
         }
         let edge = self.survey.scanner.edge_fineness;
-        let share = Self::sample_cells((pattern, edge), marked, cone, fine, counts);
+        let share = Self::sample_cells(pattern, edge, marked, cone, fine, counts);
         fine_dirs.clear();
         fine_dirs.extend(fine.iter().map(|(d, _)| to_world * *d));
         self.caster
@@ -547,7 +547,7 @@ impl Simulator<'_> {
         &self,
         pattern: &BeamPattern,
         trace: &PulseTrace,
-        refine: &mut Vec<Option<Fineness>>,
+        refine: &mut Vec<bool>,
     ) -> bool {
         let n = pattern.len();
         // The usual case: every sub-ray meets one continuous surface.
@@ -556,19 +556,18 @@ impl Simulator<'_> {
             return false;
         }
         refine.clear();
-        refine.resize(n, None);
+        refine.resize(n, false);
         let differ = |a: f64, b: f64| {
             a.is_finite() != b.is_finite()
                 || (a.is_finite() && (a - b).abs() > self.discontinuity_m)
         };
-        let edge = self.survey.scanner.edge_fineness;
         let mut any = false;
         for i in 0..n {
             let a = trace.range(i);
             for j in pattern.neighbours(i) {
                 if differ(a, trace.range(j)) {
-                    refine[i] = Some(edge);
-                    refine[j] = Some(edge);
+                    refine[i] = true;
+                    refine[j] = true;
                     any = true;
                 }
             }

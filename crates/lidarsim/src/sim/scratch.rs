@@ -16,8 +16,9 @@ pub(crate) struct Scratch {
     pub(super) dirs: Vec<DVec3>,
     /// Their closest hits and the crowns on their way.
     pub(super) trace: PulseTrace,
-    /// How finely each sub-ray's cell is sampled again, if it is.
-    pub(super) refine: Vec<Option<crate::sensor::beam::Fineness>>,
+    /// Whether each sub-ray's cell is sampled again across a
+    /// discontinuity (at the survey's `edge_rays`).
+    pub(super) refine: Vec<bool>,
     /// How many fine samples stand for each sub-ray's cell (0: none).
     pub(super) counts: Vec<u32>,
     /// Working storage of the sampling of the beam's cone.

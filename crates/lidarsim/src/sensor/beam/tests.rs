@@ -269,7 +269,7 @@ fn patch_samples_carry_the_beam_energy_over_the_target() {
             p.close_outline(&mut square);
             let mut got = 0.0;
             for i in 0..p.len() {
-                if !p.cell_meets(i, &square) {
+                if !p.cell_may_meet(i, &square) {
                     continue;
                 }
                 let mut piece = Outline::default();
